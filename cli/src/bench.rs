@@ -1,0 +1,186 @@
+//! `quadwalk bench`: physics steps per second of the robot standing, one
+//! world per thread, each thread stepping its own world.
+
+use std::sync::{Arc, Barrier};
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::Args;
+use serde_json::json;
+
+use crate::commands::{load_robot, make_world, parse_spec, positive_seconds};
+
+/// The default scenes: rigid ground, the paper's elastic scene (15 x 5 tiles
+/// around the robot) and the default 20 m long elastic terrain.
+pub const DEFAULT_TERRAINS: [&str; 3] = [
+    "rigid",
+    "elastic:5cm:length=3m:back=1.5m:width=1m",
+    "elastic:5cm",
+];
+
+/// Arguments of `quadwalk bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Terrain spec to measure (repeat for several); default: rigid, elastic:5cm on 15 x 5 tiles, elastic:5cm 20 m long
+    #[arg(long = "terrain")]
+    terrains: Vec<String>,
+    /// Thread counts to measure, one world per thread (repeat or comma-separate); default: 1 and all cores
+    #[arg(long = "threads", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1024))]
+    threads: Vec<u32>,
+    /// Simulated seconds each world steps while timed
+    #[arg(long, default_value = "10", value_parser = positive_seconds, allow_negative_numbers = true)]
+    seconds: f64,
+    /// Timed runs per measurement; the median is reported (shared machines are noisy)
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+    repeat: u32,
+    /// Print one JSON object instead of a table
+    #[arg(long)]
+    json: bool,
+}
+
+struct Measurement {
+    terrain: String,
+    tiles: usize,
+    threads: usize,
+    /// median over the repeats
+    steps_per_s: f64,
+    /// every repeat, in order
+    runs_steps_per_s: Vec<f64>,
+}
+
+fn measure(spec: &str, threads: usize, seconds: f64, repeat: u32) -> Result<Measurement> {
+    let mut runs = Vec::new();
+    let mut last = None;
+    for _ in 0..repeat {
+        let m = measure_once(spec, threads, seconds)?;
+        runs.push(m.steps_per_s);
+        last = Some(m);
+    }
+    let mut sorted = runs.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let last = last.expect("repeat >= 1");
+    Ok(Measurement {
+        steps_per_s: median,
+        runs_steps_per_s: runs,
+        ..last
+    })
+}
+
+fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement> {
+    let spec = parse_spec(spec)?;
+    let model = load_robot(None)?;
+    let steps = (seconds / robot::DT_SECS).round().max(1.0) as u64;
+    let settle_steps = 240;
+    let barrier = Arc::new(Barrier::new(threads + 1));
+    let tiles = make_world(&spec, model.clone(), 0, [0.0, 0.0])?
+        .terrain()
+        .tile_count();
+    let elapsed = std::thread::scope(|scope| -> Result<f64> {
+        let mut handles = Vec::new();
+        for _ in 0..threads {
+            let barrier = barrier.clone();
+            let model = model.clone();
+            let spec = &spec;
+            handles.push(scope.spawn(move || -> Result<()> {
+                let world = make_world(spec, model, 0, [0.0, 0.0]);
+                let mut world = match world {
+                    Ok(w) => w,
+                    Err(e) => {
+                        barrier.wait();
+                        barrier.wait();
+                        return Err(e);
+                    }
+                };
+                for _ in 0..settle_steps {
+                    world.step();
+                }
+                barrier.wait();
+                for _ in 0..steps {
+                    world.step();
+                }
+                barrier.wait();
+                Ok(())
+            }));
+        }
+        barrier.wait();
+        let start = Instant::now();
+        barrier.wait();
+        let elapsed = start.elapsed().as_secs_f64();
+        for handle in handles {
+            handle
+                .join()
+                .map_err(|_| anyhow::anyhow!("a bench thread panicked"))??;
+        }
+        Ok(elapsed)
+    })?;
+    Ok(Measurement {
+        terrain: spec.to_string(),
+        tiles,
+        threads,
+        steps_per_s: (steps * threads as u64) as f64 / elapsed,
+        runs_steps_per_s: Vec::new(),
+    })
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let terrains: Vec<String> = if args.terrains.is_empty() {
+        DEFAULT_TERRAINS.iter().map(ToString::to_string).collect()
+    } else {
+        args.terrains.clone()
+    };
+    // Check every spec before the long runs start.
+    for spec in &terrains {
+        parse_spec(spec)?;
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut threads: Vec<usize> = args.threads.iter().map(|&t| t as usize).collect();
+    if threads.is_empty() {
+        threads.push(1);
+        if cores > 1 {
+            threads.push(cores);
+        }
+    }
+    let mut results = Vec::new();
+    for spec in &terrains {
+        for &n in &threads {
+            let m = measure(spec, n, args.seconds, args.repeat)?;
+            if !args.json {
+                out!(
+                    "{:<48} {:>6} tiles  {:>2} thread(s)  {:>9.0} steps/s  {:>8.0} steps/s per world",
+                    m.terrain,
+                    m.tiles,
+                    m.threads,
+                    m.steps_per_s,
+                    m.steps_per_s / m.threads as f64
+                );
+            }
+            results.push(m);
+        }
+    }
+    if args.json {
+        let rows: Vec<_> = results
+            .iter()
+            .map(|m| {
+                let single = results
+                    .iter()
+                    .find(|o| o.terrain == m.terrain && o.threads == 1)
+                    .map(|o| o.steps_per_s);
+                json!({
+                    "terrain": m.terrain,
+                    "tiles": m.tiles,
+                    "threads": m.threads,
+                    "steps_per_s": m.steps_per_s,
+                    "steps_per_s_per_world": m.steps_per_s / m.threads as f64,
+                    "speedup_vs_1_thread": single.map(|s| m.steps_per_s / s),
+                    "runs_steps_per_s": m.runs_steps_per_s,
+                })
+            })
+            .collect();
+        out!(
+            "{}",
+            json!({ "cores": cores, "seconds_per_world": args.seconds, "repeat": args.repeat, "dt_s": robot::DT_SECS, "results": rows })
+        );
+    }
+    Ok(())
+}

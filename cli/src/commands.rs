@@ -1,0 +1,261 @@
+//! `terrain list`, `terrain show` and `stand`.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use robot::{RobotModel, World, WorldConfig};
+use serde_json::json;
+use terrain_plugins::units::format_length;
+use terrain_plugins::{BuildContext, Registry, TerrainSpec};
+
+/// Parses a finite, positive number of seconds.
+pub fn positive_seconds(text: &str) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number of seconds"))?;
+    if value.is_finite() && value > 0.0 && value <= 1.0e6 {
+        Ok(value)
+    } else {
+        Err(format!("{text:?} must be a number of seconds in (0, 1e6]"))
+    }
+}
+
+/// Parses a finite coordinate in metres.
+pub fn finite_metres(text: &str) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number of metres"))?;
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(format!("{text:?} must be finite"))
+    }
+}
+
+/// The built-in Laikago, or the URDF at `path`.
+pub fn load_robot(path: Option<&Path>) -> Result<Arc<RobotModel>> {
+    Ok(Arc::new(match path {
+        None => RobotModel::laikago(),
+        Some(path) => RobotModel::from_urdf_file(path)?,
+    }))
+}
+
+/// Parses a spec with the built-in registry.
+pub fn parse_spec(spec: &str) -> Result<TerrainSpec> {
+    Ok(Registry::builtin().parse(spec)?)
+}
+
+/// Builds one world: terrain from `spec`, robot standing at (x, y).
+pub fn make_world(
+    spec: &TerrainSpec,
+    model: Arc<RobotModel>,
+    seed: u64,
+    xy_m: [f64; 2],
+) -> Result<World> {
+    let ctx = BuildContext {
+        supported_mass_kg: model.total_mass_kg(),
+        seed,
+        ..BuildContext::default()
+    };
+    let terrain = Registry::builtin().create_from_spec(spec, &ctx);
+    let extent = terrain.extent();
+    if !extent.contains(xy_m) {
+        anyhow::bail!(
+            "start position ({}, {}) m lies outside terrain {spec}, which covers x {}..{} m, y {}..{} m",
+            xy_m[0],
+            xy_m[1],
+            extent.min_m[0],
+            extent.max_m[0],
+            extent.min_m[1],
+            extent.max_m[1]
+        );
+    }
+    World::new(model, terrain, WorldConfig::default(), xy_m)
+        .with_context(|| format!("cannot place the robot on {spec}"))
+}
+
+pub fn terrain_list() -> Result<()> {
+    let registry = Registry::builtin();
+    for plugin in registry.plugins() {
+        out!("{:<10} {}", plugin.name(), plugin.summary());
+        out!("           usage: {}", Registry::usage(plugin));
+        for decl in plugin.params() {
+            let default = decl
+                .default
+                .as_ref()
+                .map_or("required".to_string(), |d| format!("default {d}"));
+            out!("           {:<10} {} [{}]", decl.name, decl.doc, default);
+        }
+        out!("");
+    }
+    Ok(())
+}
+
+pub fn terrain_show(spec: &str, robot: Option<&Path>, seed: u64, as_json: bool) -> Result<()> {
+    let spec = parse_spec(spec)?;
+    let model = load_robot(robot)?;
+    let ctx = BuildContext {
+        supported_mass_kg: model.total_mass_kg(),
+        seed,
+        ..BuildContext::default()
+    };
+    let terrain = Registry::builtin().create_from_spec(&spec, &ctx);
+    if as_json {
+        let e = terrain.extent();
+        let regions: Vec<_> = terrain
+            .regions()
+            .iter()
+            .map(|r| {
+                json!({
+                    "index": r.index,
+                    "label": r.label,
+                    "x_range_m": [r.x_range_m.0, r.x_range_m.1],
+                    "stiffness_n_per_m": r.stiffness_n_per_m,
+                    "damping_n_s_per_m": r.damping_n_s_per_m,
+                    "expected_sink_m": r.expected_sink_m,
+                })
+            })
+            .collect();
+        let tiles = terrain
+            .tile_geometry_m()
+            .map(|(side, pitch)| json!({ "side_m": side, "pitch_m": pitch }));
+        let out = json!({
+            "terrain": spec.to_string(),
+            "robot_mass_kg": model.total_mass_kg(),
+            "tile_count": terrain.tile_count(),
+            "tiles": tiles,
+            "extent_m": { "min": e.min_m, "max": e.max_m },
+            "regions": regions,
+        });
+        out!("{out}");
+        return Ok(());
+    }
+    out!("terrain      {spec}");
+    out!(
+        "robot mass   {:.3} kg ({})",
+        model.total_mass_kg(),
+        model.name
+    );
+    match terrain.tile_geometry_m() {
+        Some((side, pitch)) => out!(
+            "tiles        {} tiles, {} side on a {} pitch",
+            terrain.tile_count(),
+            format_length(side),
+            format_length(pitch)
+        ),
+        None => out!("tiles        none"),
+    }
+    let e = terrain.extent();
+    out!(
+        "extent       x {:.2}..{:.2} m, y {:.2}..{:.2} m",
+        e.min_m[0], e.max_m[0], e.min_m[1], e.max_m[1]
+    );
+    out!("regions      {}", terrain.regions().len());
+    for r in terrain.regions() {
+        let springs = match (r.stiffness_n_per_m, r.damping_n_s_per_m) {
+            (Some(k), Some(c)) => format!("stiffness {k:8.1} N/m  damping {c:6.1} N s/m"),
+            _ => "rigid".to_string(),
+        };
+        out!(
+            "  {:>3}  x {:7.2}..{:7.2} m  {:<14} {}  expected sink {:.1} cm",
+            r.index,
+            r.x_range_m.0,
+            r.x_range_m.1,
+            r.label,
+            springs,
+            r.expected_sink_m * 100.0
+        );
+    }
+    Ok(())
+}
+
+/// Arguments of `quadwalk stand`.
+#[derive(Debug, Args)]
+pub struct StandArgs {
+    /// Terrain spec, e.g. rigid, elastic:5cm, varying:2m:2,5cm [default: elastic:5cm]
+    #[arg(long, conflicts_with = "config")]
+    terrain: Option<String>,
+    /// Experiment file (TOML) whose [terrain] section gives the terrain
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Robot description (URDF); default: the built-in Laikago
+    #[arg(long)]
+    robot: Option<PathBuf>,
+    /// Simulated seconds to stand
+    #[arg(long, default_value = "10", value_parser = positive_seconds, allow_negative_numbers = true)]
+    seconds: f64,
+    /// Base start x, m
+    #[arg(long, default_value = "0", value_parser = finite_metres, allow_negative_numbers = true)]
+    x: f64,
+    /// Base start y, m
+    #[arg(long, default_value = "0", value_parser = finite_metres, allow_negative_numbers = true)]
+    y: f64,
+    /// Seed (the varying terrain's region draw)
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Print one JSON object instead of text
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn stand(args: &StandArgs) -> Result<()> {
+    let spec = match (&args.config, &args.terrain) {
+        (Some(path), _) => crate::config::terrain_from_file(path)?,
+        (None, Some(spec)) => parse_spec(spec)?,
+        (None, None) => parse_spec("elastic:5cm")?,
+    };
+    let model = load_robot(args.robot.as_deref())?;
+    let mut world = make_world(&spec, model.clone(), args.seed, [args.x, args.y])?;
+    let report = robot::stand(&mut world, args.seconds);
+    if args.json {
+        let out = json!({
+            "terrain": spec.to_string(),
+            "robot": model.name,
+            "robot_mass_kg": model.total_mass_kg(),
+            "start_xy_m": [args.x, args.y],
+            "region": report.region,
+            "seconds": report.seconds,
+            "steps": report.steps,
+            "base_height_m": report.base_height_m,
+            "base_height_drift_m": report.base_height_drift_m,
+            "max_tilt_deg": report.max_tilt_deg,
+            "mean_loaded_sink_m": report.mean_loaded_sink_m,
+            "expected_sink_m": report.expected_sink_m,
+            "window_secs": report.window_secs,
+            "non_foot_contacts": report.non_foot_contacts,
+        });
+        out!("{out}");
+    } else {
+        out!("terrain             {spec} (region {})", report.region);
+        out!(
+            "robot               {} ({:.3} kg)",
+            model.name,
+            model.total_mass_kg()
+        );
+        out!(
+            "stood               {:.2} s ({} steps)",
+            report.seconds, report.steps
+        );
+        out!("base height         {:.4} m", report.base_height_m);
+        out!(
+            "base height drift   {:.2} mm over the last {:.1} s",
+            report.base_height_drift_m * 1000.0,
+            report.window_secs
+        );
+        out!("max tilt            {:.2} deg", report.max_tilt_deg);
+        out!(
+            "mean loaded sink    {:.2} cm (expected {:.2} cm)",
+            report.mean_loaded_sink_m * 100.0,
+            report.expected_sink_m * 100.0
+        );
+        let contacts = if report.non_foot_contacts.is_empty() {
+            "none".to_string()
+        } else {
+            report.non_foot_contacts.join(", ")
+        };
+        out!("non-foot contacts   {contacts}");
+    }
+    Ok(())
+}

@@ -1,0 +1,14 @@
+//! quadwalk's robot: the model (URDF), leg kinematics and IK, PD control and
+//! the physics world that puts the robot on a terrain.
+
+pub mod kinematics;
+pub mod mesh;
+pub mod model;
+pub mod seam;
+pub mod stand;
+pub mod world;
+
+pub use kinematics::{IkSolution, KinematicsError, LegKinematics};
+pub use model::{LAIKAGO_URDF, LegName, ModelError, RobotModel};
+pub use stand::{StandReport, stand};
+pub use world::{DT_SECS, GroundContacts, World, WorldConfig, WorldError};

@@ -1,0 +1,124 @@
+//! Standing still in the squat: the physical check of a robot on a terrain.
+
+use crate::world::World;
+
+/// Length of the window the settled figures are taken over, s.
+pub const SETTLED_WINDOW_SECS: f64 = 5.0;
+
+/// What happened while the robot stood.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandReport {
+    /// simulated seconds
+    pub seconds: f64,
+    /// physics steps
+    pub steps: u64,
+    /// base height above the terrain's resting surface (z = 0) at the end, m
+    pub base_height_m: f64,
+    /// max minus min base height over the settled window, m
+    pub base_height_drift_m: f64,
+    /// largest tilt of the base over the whole run, degrees
+    pub max_tilt_deg: f64,
+    /// mean sink of the tiles under the four feet over the settled window, m
+    pub mean_loaded_sink_m: f64,
+    /// the sink the terrain's region at the robot promises, m
+    pub expected_sink_m: f64,
+    /// the terrain region the robot stands in
+    pub region: String,
+    /// links other than feet that touched the ground at any time
+    pub non_foot_contacts: Vec<String>,
+    /// the settled window's length, s (the last 5 s, or the second half of a shorter run)
+    pub window_secs: f64,
+}
+
+/// Lets the robot stand for `seconds` holding its current PD targets.
+pub fn stand(world: &mut World, seconds: f64) -> StandReport {
+    let steps = (seconds / crate::DT_SECS).round().max(1.0) as u64;
+    let window_secs = SETTLED_WINDOW_SECS.min(seconds / 2.0);
+    let window_start = steps.saturating_sub((window_secs / crate::DT_SECS).round() as u64);
+    let mut max_tilt_rad: f64 = 0.0;
+    let (mut min_h, mut max_h) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut sink_sum, mut sink_samples) = (0.0, 0u64);
+    let mut non_foot: Vec<String> = Vec::new();
+    for step in 0..steps {
+        world.step();
+        max_tilt_rad = max_tilt_rad.max(world.tilt_rad());
+        for link in world.ground_contacts().non_foot_links {
+            if !non_foot.contains(&link) {
+                non_foot.push(link);
+            }
+        }
+        if step >= window_start {
+            let h = world.base_pose().translation.z;
+            min_h = min_h.min(h);
+            max_h = max_h.max(h);
+            let feet = world.feet_in_world_m();
+            let sink: f64 = feet
+                .iter()
+                .map(|f| -world.surface_height_m(f.x, f.y))
+                .sum::<f64>()
+                / 4.0;
+            sink_sum += sink;
+            sink_samples += 1;
+        }
+    }
+    let base = world.base_pose().translation.vector;
+    let terrain = world.terrain();
+    let region = &terrain.regions()[terrain.region_index_at(base.x, base.y)];
+    StandReport {
+        seconds: steps as f64 * crate::DT_SECS,
+        steps,
+        base_height_m: base.z,
+        base_height_drift_m: max_h - min_h,
+        max_tilt_deg: max_tilt_rad.to_degrees(),
+        mean_loaded_sink_m: sink_sum / sink_samples.max(1) as f64,
+        expected_sink_m: region.expected_sink_m,
+        region: region.label.clone(),
+        non_foot_contacts: non_foot,
+        window_secs,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use terrain_plugins::{BuildContext, Registry};
+
+    use super::*;
+    use crate::{RobotModel, WorldConfig};
+
+    fn stand_on(spec: &str, xy: [f64; 2], seconds: f64) -> StandReport {
+        let model = Arc::new(RobotModel::laikago());
+        let ctx = BuildContext {
+            supported_mass_kg: model.total_mass_kg(),
+            ..BuildContext::default()
+        };
+        let terrain = Registry::builtin().create(spec, &ctx).unwrap();
+        let mut world = World::new(model, terrain, WorldConfig::default(), xy).unwrap();
+        stand(&mut world, seconds)
+    }
+
+    #[test]
+    fn stands_on_rigid_ground() {
+        let r = stand_on("rigid", [0.0, 0.0], 10.0);
+        println!("{r:?}");
+        assert!(r.max_tilt_deg < 2.0, "{r:?}");
+        assert!(r.base_height_drift_m < 0.005, "{r:?}");
+        assert!(r.non_foot_contacts.is_empty(), "{r:?}");
+        assert!((r.base_height_m - 0.38).abs() < 0.03, "{r:?}");
+    }
+
+    #[test]
+    fn sinks_the_named_depth_on_elastic_tiles() {
+        for (spec, depth) in [("elastic:2cm", 0.02), ("elastic:5cm", 0.05)] {
+            let r = stand_on(spec, [0.0, 0.0], 10.0);
+            println!("{spec}: {r:?}");
+            assert!(
+                (r.mean_loaded_sink_m - depth).abs() <= 0.1 * depth,
+                "{spec}: {r:?}"
+            );
+            assert!(r.max_tilt_deg < 5.0, "{spec}: {r:?}");
+            assert!(r.non_foot_contacts.is_empty(), "{spec}: {r:?}");
+        }
+    }
+}

@@ -1,0 +1,515 @@
+//! The physics world: rapier sets, a terrain and the robot as a multibody
+//! with force-based PD joint motors, stepped at 240 Hz.
+//!
+//! Robot: a rapier multibody (reduced coordinates; stable at 4 solver
+//! iterations on rigid and elastic ground). Each actuated joint has a
+//! `MotorModel::ForceBased` position motor, so the gains are in N m/rad and
+//! N m s/rad, with the URDF's effort as the torque limit. Rapier cannot
+//! report a multibody motor's torque, so the world computes the PD torque
+//! itself after each step: tau = clamp(kp (q* - q) - kd q', +-effort).
+//!
+//! Collision groups: robot colliders meet terrain colliders only.
+
+use std::sync::Arc;
+
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+use terrain_plugins::rapier3d::prelude::*;
+use terrain_plugins::{Terrain, robot_collision_groups};
+
+use crate::kinematics::{KinematicsError, LegKinematics};
+use crate::model::{Geometry, RobotModel};
+use crate::seam::{from_pose, from_vector, to_matrix, to_pose, to_vector};
+
+/// Physics step, seconds (240 Hz, as the paper).
+pub const DT_SECS: f64 = 1.0 / 240.0;
+
+/// Toe-centre height below the base in the default wide squat, m.
+pub const SQUAT_FOOT_DEPTH_M: f64 = 0.35;
+/// Lateral distance of each foot from the body axis in the wide squat, m
+/// (a narrow stance tips over on 5 cm springs).
+pub const SQUAT_FOOT_WIDTH_M: f64 = 0.2;
+
+/// Two shapes closer than this touch, m. Rapier keeps speculative contacts
+/// up to 2 cm apart; only these closer ones count as touching.
+pub const TOUCH_DISTANCE_M: f64 = 0.001;
+
+/// Settings of the world.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WorldConfig {
+    /// PD position gain, N m/rad
+    pub kp_n_m_per_rad: f64,
+    /// PD velocity gain, N m s/rad
+    pub kd_n_m_s_per_rad: f64,
+    /// rapier solver iterations per step
+    pub solver_iterations: usize,
+    /// friction coefficient of the robot's colliders
+    pub friction: f64,
+}
+
+impl Default for WorldConfig {
+    fn default() -> Self {
+        Self {
+            kp_n_m_per_rad: 600.0,
+            kd_n_m_s_per_rad: 8.0,
+            solver_iterations: 4,
+            friction: 1.0,
+        }
+    }
+}
+
+/// Why a world could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum WorldError {
+    /// The model's legs do not fit the analytic IK.
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// A collision mesh has no convex hull.
+    #[error("collision shape of link {0} is degenerate (its convex hull is flat)")]
+    DegenerateShape(String),
+    /// The default squat is out of reach for this robot.
+    #[error(
+        "the default squat (feet {SQUAT_FOOT_WIDTH_M} m out, {SQUAT_FOOT_DEPTH_M} m below the base) is out of reach for leg {0}"
+    )]
+    SquatUnreachable(&'static str),
+}
+
+/// Which robot parts touch the ground now.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GroundContacts {
+    /// per leg (FR, FL, RR, RL): the foot touches the ground
+    pub feet: [bool; 4],
+    /// names of the links other than feet that touch the ground
+    pub non_foot_links: Vec<String>,
+}
+
+struct RobotHandles {
+    /// rigid body of each model body
+    bodies: Vec<RigidBodyHandle>,
+    multibody: MultibodyIndex,
+    /// multibody link id of each actuated joint's child
+    joint_links: Vec<usize>,
+    /// (collider, URDF link name, is foot)
+    colliders: Vec<(ColliderHandle, String, bool)>,
+}
+
+/// A physics world holding one terrain and one robot.
+pub struct World {
+    physics: PhysicsWorld,
+    terrain: Box<dyn Terrain>,
+    model: Arc<RobotModel>,
+    legs: [LegKinematics; 4],
+    robot: RobotHandles,
+    config: WorldConfig,
+    targets_rad: Vec<f64>,
+    torques_n_m: Vec<f64>,
+    efforts_n_m: Vec<f64>,
+    limits_rad: Vec<(f64, f64)>,
+    squat_rad: Vec<f64>,
+    time_secs: f64,
+    steps: u64,
+}
+
+impl World {
+    /// Builds the terrain and the robot, standing in the default squat at
+    /// (x, y) on the terrain, facing +x.
+    pub fn new(
+        model: Arc<RobotModel>,
+        mut terrain: Box<dyn Terrain>,
+        config: WorldConfig,
+        start_xy_m: [f64; 2],
+    ) -> Result<Self, WorldError> {
+        let legs = LegKinematics::from_model(&model)?;
+        let mut physics = PhysicsWorld::new();
+        physics.gravity = Vector::new(0.0, 0.0, -terrain_plugins::STANDARD_GRAVITY_M_PER_S2 as f32);
+        physics.integration_parameters.dt = DT_SECS as f32;
+        physics.integration_parameters.num_solver_iterations = config.solver_iterations;
+        terrain.build(&mut physics);
+
+        let robot = insert_robot(&mut physics, &model, &config)?;
+        let n = model.joints.len();
+        let mut squat_rad = vec![0.0; n];
+        for (leg, kin) in model.legs.iter().zip(&legs) {
+            let target = Vector3::new(
+                kin.abduction_m.x,
+                SQUAT_FOOT_WIDTH_M * leg.name.side_sign(),
+                -SQUAT_FOOT_DEPTH_M,
+            );
+            let sol = kin.inverse(target);
+            if sol.clamped {
+                return Err(WorldError::SquatUnreachable(leg.name.short()));
+            }
+            for (k, &j) in leg.joints.iter().enumerate() {
+                squat_rad[j] = sol.q_rad[k];
+            }
+        }
+        let mut world = Self {
+            physics,
+            terrain,
+            efforts_n_m: model.joints.iter().map(|j| j.effort_n_m).collect(),
+            limits_rad: model.joint_limits_rad(),
+            model,
+            legs,
+            robot,
+            config,
+            targets_rad: squat_rad.clone(),
+            torques_n_m: vec![0.0; n],
+            squat_rad,
+            time_secs: 0.0,
+            steps: 0,
+        };
+        world.reset_robot(start_xy_m, 0.0);
+        Ok(world)
+    }
+
+    /// Puts the robot back in the squat at (x, y) with heading `yaw_rad`,
+    /// its feet just above the surface, at rest, with the squat as PD target.
+    pub fn reset_robot(&mut self, start_xy_m: [f64; 2], yaw_rad: f64) {
+        let [x, y] = start_xy_m;
+        let foot_radius = self.model.legs[0].foot_radius_m;
+        let surface = self.terrain.surface_height_m(&self.physics, x, y);
+        let clearance_m = 0.002;
+        let base = Isometry3::new(
+            Vector3::new(
+                x,
+                y,
+                surface + SQUAT_FOOT_DEPTH_M + foot_radius + clearance_m,
+            ),
+            Vector3::z() * yaw_rad,
+        );
+        let root = self.robot.bodies[0];
+        self.physics.bodies[root].set_position(to_pose(&base), true);
+        let multibody = self
+            .physics
+            .multibody_joints
+            .get_multibody_mut(self.robot.multibody)
+            .expect("the robot's multibody exists");
+        let mut displacement = vec![0.0f32; multibody.ndofs()];
+        for (j, &link_id) in self.robot.joint_links.iter().enumerate() {
+            let link = multibody.link(link_id).expect("joint link exists");
+            let current = link.joint.coords()[3];
+            displacement[link.assembly_id()] = self.squat_rad[j] as f32 - current;
+        }
+        multibody.apply_displacements(&displacement);
+        multibody.generalized_velocity_mut().fill(0.0);
+        multibody.forward_kinematics(&self.physics.bodies, true);
+        multibody.update_rigid_bodies(&mut self.physics.bodies, true);
+        for &handle in &self.robot.bodies {
+            let body = &mut self.physics.bodies[handle];
+            body.set_linvel(Vector::ZERO, true);
+            body.set_angvel(Vector::ZERO, true);
+        }
+        let squat = self.squat_rad.clone();
+        self.set_joint_targets_rad(&squat);
+        self.torques_n_m.fill(0.0);
+    }
+
+    /// Sets the PD position targets (joint order), clamped to the limits.
+    pub fn set_joint_targets_rad(&mut self, targets_rad: &[f64]) {
+        assert_eq!(
+            targets_rad.len(),
+            self.targets_rad.len(),
+            "one target per actuated joint"
+        );
+        let multibody = self
+            .physics
+            .multibody_joints
+            .get_multibody_mut(self.robot.multibody)
+            .expect("the robot's multibody exists");
+        for (j, &link_id) in self.robot.joint_links.iter().enumerate() {
+            let (lo, hi) = self.limits_rad[j];
+            let target = if targets_rad[j].is_finite() {
+                targets_rad[j].clamp(lo, hi)
+            } else {
+                self.targets_rad[j]
+            };
+            self.targets_rad[j] = target;
+            let link = multibody.link_mut(link_id).expect("joint link exists");
+            link.joint.data.set_motor_position(
+                JointAxis::AngX,
+                target as f32,
+                self.config.kp_n_m_per_rad as f32,
+                self.config.kd_n_m_s_per_rad as f32,
+            );
+        }
+    }
+
+    /// One physics step of [`DT_SECS`].
+    pub fn step(&mut self) {
+        self.terrain.before_step(&mut self.physics, DT_SECS);
+        self.physics.step();
+        self.time_secs += DT_SECS;
+        self.steps += 1;
+        // The torque the PD motors apply (rapier does not report it).
+        let q = self.joint_positions_rad();
+        let qd = self.joint_velocities_rad_per_s();
+        for j in 0..q.len() {
+            let tau = self.config.kp_n_m_per_rad * (self.targets_rad[j] - q[j])
+                - self.config.kd_n_m_s_per_rad * qd[j];
+            self.torques_n_m[j] = tau.clamp(-self.efforts_n_m[j], self.efforts_n_m[j]);
+        }
+    }
+
+    /// Joint positions, rad (joint order: FR, FL, RR, RL x abduction, hip, knee).
+    pub fn joint_positions_rad(&self) -> Vec<f64> {
+        let multibody = self.multibody();
+        self.robot
+            .joint_links
+            .iter()
+            .map(|&id| {
+                multibody
+                    .link(id)
+                    .expect("joint link exists")
+                    .joint
+                    .coords()[3] as f64
+            })
+            .collect()
+    }
+
+    /// Joint velocities, rad/s (joint order).
+    pub fn joint_velocities_rad_per_s(&self) -> Vec<f64> {
+        let multibody = self.multibody();
+        let velocities = multibody.generalized_velocity();
+        self.robot
+            .joint_links
+            .iter()
+            .map(|&id| {
+                velocities[multibody.link(id).expect("joint link exists").assembly_id()] as f64
+            })
+            .collect()
+    }
+
+    /// The PD torque applied in the last step, N m (joint order).
+    pub fn applied_torques_n_m(&self) -> &[f64] {
+        &self.torques_n_m
+    }
+
+    /// The current PD targets, rad (joint order).
+    pub fn joint_targets_rad(&self) -> &[f64] {
+        &self.targets_rad
+    }
+
+    /// The default squat's joint angles, rad (joint order).
+    pub fn squat_rad(&self) -> &[f64] {
+        &self.squat_rad
+    }
+
+    /// The base's pose in the world frame.
+    pub fn base_pose(&self) -> Isometry3<f64> {
+        from_pose(self.physics.bodies[self.robot.bodies[0]].position())
+    }
+
+    /// The base's linear (m/s) and angular (rad/s) velocity, world frame.
+    pub fn base_velocity(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let body = &self.physics.bodies[self.robot.bodies[0]];
+        (from_vector(body.linvel()), from_vector(body.angvel()))
+    }
+
+    /// Every model body's pose in the world frame (model body order).
+    pub fn body_poses(&self) -> Vec<Isometry3<f64>> {
+        self.robot
+            .bodies
+            .iter()
+            .map(|&h| from_pose(self.physics.bodies[h].position()))
+            .collect()
+    }
+
+    /// Foot (toe centre) positions in the world frame, per leg.
+    pub fn feet_in_world_m(&self) -> [Vector3<f64>; 4] {
+        self.model.legs.clone().map(|leg| {
+            let pose = from_pose(self.physics.bodies[self.robot.bodies[leg.foot_body]].position());
+            (pose * Point3::from(leg.foot_in_body_m)).coords
+        })
+    }
+
+    /// Angle between the base's up axis and the world's, rad.
+    pub fn tilt_rad(&self) -> f64 {
+        let up = self.base_pose().rotation * Vector3::z();
+        up.z.clamp(-1.0, 1.0).acos()
+    }
+
+    /// Which robot parts touch the ground now.
+    pub fn ground_contacts(&self) -> GroundContacts {
+        let mut contacts = GroundContacts::default();
+        for (handle, link, is_foot) in &self.robot.colliders {
+            let touching = self.physics.contact_pairs_with(*handle).any(|pair| {
+                pair.find_deepest_contact()
+                    .is_some_and(|(_, contact)| contact.dist as f64 <= TOUCH_DISTANCE_M)
+            });
+            if !touching {
+                continue;
+            }
+            if *is_foot {
+                if let Some(leg) = self.model.legs.iter().position(|l| {
+                    self.model.bodies[l.foot_body]
+                        .collisions
+                        .iter()
+                        .any(|c| c.is_foot && &c.link == link)
+                }) {
+                    contacts.feet[leg] = true;
+                }
+            } else if !contacts.non_foot_links.contains(link) {
+                contacts.non_foot_links.push(link.clone());
+            }
+        }
+        contacts
+    }
+
+    /// The terrain.
+    pub fn terrain(&self) -> &dyn Terrain {
+        self.terrain.as_ref()
+    }
+
+    /// The rapier world (read-only).
+    pub fn physics(&self) -> &PhysicsWorld {
+        &self.physics
+    }
+
+    /// The robot model.
+    pub fn model(&self) -> &RobotModel {
+        &self.model
+    }
+
+    /// Per-leg kinematics (FK/IK in the base frame).
+    pub fn legs(&self) -> &[LegKinematics; 4] {
+        &self.legs
+    }
+
+    /// Simulated time since the world was made, s.
+    pub fn time_secs(&self) -> f64 {
+        self.time_secs
+    }
+
+    /// Physics steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Height of the terrain surface right below (x, y), m.
+    pub fn surface_height_m(&self, x_m: f64, y_m: f64) -> f64 {
+        self.terrain.surface_height_m(&self.physics, x_m, y_m)
+    }
+
+    fn multibody(&self) -> &Multibody {
+        self.physics
+            .multibody_joints
+            .get_multibody(self.robot.multibody)
+            .expect("the robot's multibody exists")
+    }
+}
+
+fn insert_robot(
+    physics: &mut PhysicsWorld,
+    model: &RobotModel,
+    config: &WorldConfig,
+) -> Result<RobotHandles, WorldError> {
+    let zero = vec![0.0; model.joints.len()];
+    let poses = model.body_poses_in_base(&zero);
+    let mut bodies = Vec::with_capacity(model.bodies.len());
+    let mut colliders = Vec::new();
+    for (body, pose) in model.bodies.iter().zip(&poses) {
+        let mass = MassProperties::with_inertia_matrix(
+            to_vector(&body.com_in_body_m),
+            body.mass_kg as f32,
+            to_matrix(&body.inertia_kg_m2),
+        );
+        let rigid_body = RigidBodyBuilder::dynamic()
+            .pose(to_pose(pose))
+            .additional_mass_properties(mass)
+            .can_sleep(false);
+        let handle = physics.insert_body(rigid_body);
+        for shape in &body.collisions {
+            let mut shape_pose = shape.shape_in_body;
+            let builder = match &shape.geometry {
+                Geometry::Box { half_extents_m: h } => {
+                    ColliderBuilder::cuboid(h.x as f32, h.y as f32, h.z as f32)
+                }
+                Geometry::Sphere { radius_m } => ColliderBuilder::ball(*radius_m as f32),
+                Geometry::Capsule {
+                    radius_m,
+                    half_length_m,
+                } => ColliderBuilder::capsule_z(*half_length_m as f32, *radius_m as f32),
+                Geometry::Cylinder {
+                    radius_m,
+                    half_length_m,
+                } => {
+                    // rapier's cylinders run along y, URDF's along z.
+                    shape_pose *= UnitQuaternion::from_axis_angle(
+                        &Vector3::x_axis(),
+                        std::f64::consts::FRAC_PI_2,
+                    );
+                    ColliderBuilder::cylinder(*half_length_m as f32, *radius_m as f32)
+                }
+                Geometry::ConvexHull { points_m } => {
+                    let points: Vec<Vector> = points_m.iter().map(to_vector).collect();
+                    ColliderBuilder::convex_hull(&points)
+                        .ok_or_else(|| WorldError::DegenerateShape(shape.link.clone()))?
+                }
+            };
+            let collider = builder
+                .position(to_pose(&shape_pose))
+                .density(0.0)
+                .friction(config.friction as f32)
+                .collision_groups(robot_collision_groups());
+            let collider_handle = physics.insert_collider(collider, Some(handle));
+            colliders.push((collider_handle, shape.link.clone(), shape.is_foot));
+        }
+        bodies.push(handle);
+    }
+
+    // Joints: the frame whose x is the joint axis, so rapier's AngX is the joint.
+    for joint in &model.joints {
+        let axis = joint.axis_in_child.into_inner();
+        let align = UnitQuaternion::rotation_between(&Vector3::x(), &axis).unwrap_or_else(|| {
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI)
+        });
+        let frame2 = Isometry3::from_parts(nalgebra::Translation3::identity(), align);
+        let frame1 = joint.child_in_parent * frame2;
+        let mut builder = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
+            .local_frame1(to_pose(&frame1))
+            .local_frame2(to_pose(&frame2))
+            .motor_model(JointAxis::AngX, MotorModel::ForceBased)
+            .motor_position(
+                JointAxis::AngX,
+                0.0,
+                config.kp_n_m_per_rad as f32,
+                config.kd_n_m_s_per_rad as f32,
+            );
+        if joint.effort_n_m.is_finite() {
+            builder = builder.motor_max_force(JointAxis::AngX, joint.effort_n_m as f32);
+        }
+        if let Some((lo, hi)) = joint.limits_rad {
+            builder = builder.limits(JointAxis::AngX, [lo as f32, hi as f32]);
+        }
+        physics
+            .multibody_joints
+            .insert(
+                bodies[joint.parent],
+                bodies[joint.child],
+                builder.build(),
+                true,
+            )
+            .expect("a tree of new bodies makes a valid multibody");
+    }
+    let root_link = physics
+        .multibody_joints
+        .rigid_body_link(bodies[0])
+        .expect("the root is in the multibody");
+    let multibody = root_link.multibody;
+    let joint_links = model
+        .joints
+        .iter()
+        .map(|j| {
+            physics
+                .multibody_joints
+                .rigid_body_link(bodies[j.child])
+                .expect("every child is a link")
+                .id
+        })
+        .collect();
+    Ok(RobotHandles {
+        bodies,
+        multibody,
+        joint_links,
+        colliders,
+    })
+}

@@ -1,0 +1,392 @@
+//! Terrain specs: `name:arg:arg:key=value`, their declared parameters, values
+//! in SI units, and errors that keep the input.
+//!
+//! A spec is parsed against a plugin's declared parameters by the
+//! [`Registry`](crate::Registry). Positional arguments fill the required
+//! parameters in order; optional parameters are given as `key=value`
+//! (`elastic:5cm:travel=12cm:length=30m`). Every parameter is stored resolved
+//! (defaults filled in), in SI units, so two specs that mean the same terrain
+//! compare equal however they were written. [`TerrainSpec`]'s `Display` prints
+//! the canonical form: positional values, then the optional ones that differ
+//! from their default; parsing that text gives back an equal spec.
+
+use std::fmt;
+
+use crate::units::{
+    LengthUnit, format_length, format_mass, parse_finite, parse_length_m, parse_mass_kg,
+    split_number_unit,
+};
+
+/// What a parameter holds, and so how its text is parsed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParamKind {
+    /// A length with a unit (`5cm`), stored in metres; must be > 0.
+    Length,
+    /// A mass with a unit (`25kg`), stored in kilograms; must be > 0.
+    Mass,
+    /// A dimensionless number (`0.5`); must be >= 0.
+    Number,
+    /// A comma-separated list of surfaces, each a sinking depth or `rigid`
+    /// (`2,3,4,5cm,rigid`). A bare number takes the next unit written after
+    /// it in the list, so `2,3cm` is 2 cm and 3 cm.
+    Surfaces,
+}
+
+impl ParamKind {
+    fn describe(self) -> &'static str {
+        match self {
+            Self::Length => "a length such as 5cm, 0.05m or 50mm",
+            Self::Mass => "a mass such as 25kg",
+            Self::Number => "a number such as 0.5",
+            Self::Surfaces => "a list of depths and `rigid`, such as 2,3,4,5cm,rigid",
+        }
+    }
+}
+
+/// One surface of a [`ParamKind::Surfaces`] list.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Surface {
+    /// Rigid ground.
+    Rigid,
+    /// Elastic tiles that sink this much (metres) under the standing robot.
+    Elastic {
+        /// nominal sinking depth, metres
+        depth_m: f64,
+    },
+}
+
+impl fmt::Display for Surface {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Rigid => f.write_str("rigid"),
+            Self::Elastic { depth_m } => f.write_str(&format_length(*depth_m)),
+        }
+    }
+}
+
+/// A parameter value, in SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParamValue {
+    /// metres
+    Length(f64),
+    /// kilograms
+    Mass(f64),
+    /// dimensionless
+    Number(f64),
+    /// a list of surfaces
+    Surfaces(Vec<Surface>),
+}
+
+impl fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Length(v) => f.write_str(&format_length(*v)),
+            Self::Mass(v) => f.write_str(&format_mass(*v)),
+            Self::Number(v) => write!(f, "{v}"),
+            Self::Surfaces(list) => {
+                let items: Vec<String> = list.iter().map(Surface::to_string).collect();
+                f.write_str(&items.join(","))
+            }
+        }
+    }
+}
+
+/// A parameter a plugin declares: its name, kind, default (`None` makes it
+/// required and positional) and a one-line description with its unit.
+#[derive(Debug, Clone)]
+pub struct ParamDecl {
+    /// name used in `key=value` and in TOML tables
+    pub name: &'static str,
+    /// how its text is parsed
+    pub kind: ParamKind,
+    /// `None`: required, given positionally in declaration order
+    pub default: Option<ParamValue>,
+    /// one line for `quadwalk terrain list`
+    pub doc: &'static str,
+}
+
+impl ParamDecl {
+    /// A required parameter, given positionally.
+    pub fn required(name: &'static str, kind: ParamKind, doc: &'static str) -> Self {
+        Self {
+            name,
+            kind,
+            default: None,
+            doc,
+        }
+    }
+
+    /// An optional `key=value` parameter with a default.
+    pub fn optional(
+        name: &'static str,
+        kind: ParamKind,
+        default: ParamValue,
+        doc: &'static str,
+    ) -> Self {
+        Self {
+            name,
+            kind,
+            default: Some(default),
+            doc,
+        }
+    }
+
+    /// Parses this parameter's text into an SI value, checking its range.
+    pub fn parse_value(&self, text: &str) -> Result<ParamValue, String> {
+        let text = text.trim();
+        let positive = |v: f64, what: &str| {
+            if v > 0.0 {
+                Ok(v)
+            } else {
+                Err(format!("{what} must be greater than zero, got {text:?}"))
+            }
+        };
+        match self.kind {
+            ParamKind::Length => parse_length_m(text)
+                .and_then(|v| positive(v, "length"))
+                .map(ParamValue::Length),
+            ParamKind::Mass => parse_mass_kg(text)
+                .and_then(|v| positive(v, "mass"))
+                .map(ParamValue::Mass),
+            ParamKind::Number => {
+                let v = parse_finite(text)?;
+                if v < 0.0 {
+                    return Err(format!("must not be negative, got {text:?}"));
+                }
+                Ok(ParamValue::Number(v))
+            }
+            ParamKind::Surfaces => parse_surfaces(text).map(ParamValue::Surfaces),
+        }
+    }
+
+    /// What this parameter expects, for error messages.
+    pub fn expects(&self) -> &'static str {
+        self.kind.describe()
+    }
+}
+
+fn parse_surfaces(text: &str) -> Result<Vec<Surface>, String> {
+    if text.is_empty() {
+        return Err("the list is empty".to_string());
+    }
+    let items: Vec<&str> = text.split(',').map(str::trim).collect();
+    let mut out = vec![None; items.len()];
+    // Walk backwards so a bare number picks up the next unit written after it.
+    let mut pending_unit: Option<LengthUnit> = None;
+    for (i, item) in items.iter().enumerate().rev() {
+        if item.is_empty() {
+            return Err(format!("item {} of {text:?} is empty", i + 1));
+        }
+        if item.eq_ignore_ascii_case("rigid") {
+            out[i] = Some(Surface::Rigid);
+            continue;
+        }
+        let (number, unit) = split_number_unit(item);
+        let value = parse_finite(number).map_err(|e| format!("item {item:?}: {e}"))?;
+        let unit = if unit.is_empty() {
+            pending_unit.ok_or_else(|| {
+                format!("item {item:?} has no unit and no unit follows it (write e.g. {item}cm)")
+            })?
+        } else {
+            let parsed = LengthUnit::parse(unit).ok_or_else(|| {
+                format!("item {item:?} has unknown unit {unit:?} (known: m, cm, mm)")
+            })?;
+            pending_unit = Some(parsed);
+            parsed
+        };
+        let depth_m = unit.to_m(value);
+        if depth_m <= 0.0 {
+            return Err(format!("depth {item:?} must be greater than zero"));
+        }
+        out[i] = Some(Surface::Elastic { depth_m });
+    }
+    Ok(out.into_iter().flatten().collect())
+}
+
+/// A parsed terrain spec: the plugin name and every declared parameter with
+/// its resolved value, in declaration order.
+#[derive(Debug, Clone)]
+pub struct TerrainSpec {
+    plugin: String,
+    params: Vec<(ParamDecl, ParamValue)>,
+}
+
+impl TerrainSpec {
+    pub(crate) fn new(plugin: String, params: Vec<(ParamDecl, ParamValue)>) -> Self {
+        Self { plugin, params }
+    }
+
+    /// The plugin's name (`elastic`).
+    pub fn plugin(&self) -> &str {
+        &self.plugin
+    }
+
+    /// The value of parameter `name`, if the plugin declares it.
+    pub fn get(&self, name: &str) -> Option<&ParamValue> {
+        self.params
+            .iter()
+            .find(|(d, _)| d.name == name)
+            .map(|(_, v)| v)
+    }
+
+    /// All parameters with their values, in declaration order.
+    pub fn params(&self) -> impl Iterator<Item = (&ParamDecl, &ParamValue)> {
+        self.params.iter().map(|(d, v)| (d, v))
+    }
+
+    /// A length parameter in metres. Panics if the plugin did not declare
+    /// `name` as a length: that is a bug in the plugin, not bad input.
+    pub fn length_m(&self, name: &str) -> f64 {
+        match self.get(name) {
+            Some(ParamValue::Length(v)) => *v,
+            other => panic!(
+                "plugin {} has no length parameter {name} (found {other:?})",
+                self.plugin
+            ),
+        }
+    }
+
+    /// A mass parameter in kilograms (see [`Self::length_m`] on panics).
+    pub fn mass_kg(&self, name: &str) -> f64 {
+        match self.get(name) {
+            Some(ParamValue::Mass(v)) => *v,
+            other => panic!(
+                "plugin {} has no mass parameter {name} (found {other:?})",
+                self.plugin
+            ),
+        }
+    }
+
+    /// A dimensionless parameter (see [`Self::length_m`] on panics).
+    pub fn number(&self, name: &str) -> f64 {
+        match self.get(name) {
+            Some(ParamValue::Number(v)) => *v,
+            other => panic!(
+                "plugin {} has no number parameter {name} (found {other:?})",
+                self.plugin
+            ),
+        }
+    }
+
+    /// A surfaces-list parameter (see [`Self::length_m`] on panics).
+    pub fn surfaces(&self, name: &str) -> &[Surface] {
+        match self.get(name) {
+            Some(ParamValue::Surfaces(v)) => v,
+            other => panic!(
+                "plugin {} has no surfaces parameter {name} (found {other:?})",
+                self.plugin
+            ),
+        }
+    }
+}
+
+impl PartialEq for TerrainSpec {
+    fn eq(&self, other: &Self) -> bool {
+        self.plugin == other.plugin
+            && self.params.len() == other.params.len()
+            && self
+                .params
+                .iter()
+                .zip(&other.params)
+                .all(|((da, va), (db, vb))| da.name == db.name && va == vb)
+    }
+}
+
+impl fmt::Display for TerrainSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.plugin)?;
+        for (decl, value) in &self.params {
+            match &decl.default {
+                None => write!(f, ":{value}")?,
+                Some(default) if default != value => write!(f, ":{}={value}", decl.name)?,
+                Some(_) => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+impl std::str::FromStr for TerrainSpec {
+    type Err = SpecError;
+
+    /// Parses against the built-in plugins; use
+    /// [`Registry::parse`](crate::Registry::parse) for a registry with your own.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        crate::Registry::builtin().parse(s)
+    }
+}
+
+/// Why a spec was refused. Every variant keeps the whole input.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SpecError {
+    /// Nothing was given.
+    #[error("terrain spec {input:?} is empty (known terrains: {known})")]
+    Empty {
+        /// the input
+        input: String,
+        /// known plugin names, comma-separated
+        known: String,
+    },
+    /// No plugin has this name.
+    #[error("terrain spec {input:?}: unknown terrain {name:?} (known terrains: {known})")]
+    UnknownPlugin {
+        /// the input
+        input: String,
+        /// the name that was not found
+        name: String,
+        /// known plugin names, comma-separated
+        known: String,
+    },
+    /// Too many or too few positional arguments.
+    #[error(
+        "terrain spec {input:?}: {plugin} takes {expected} positional argument(s), got {got} (usage: {usage})"
+    )]
+    Arity {
+        /// the input
+        input: String,
+        /// plugin name
+        plugin: String,
+        /// how many it takes
+        expected: usize,
+        /// how many were given
+        got: usize,
+        /// e.g. `elastic:<depth>[:key=value...]`
+        usage: String,
+    },
+    /// A `key=value` names no parameter of the plugin, or names one twice.
+    #[error("terrain spec {input:?}: {plugin} {problem} {name:?} (its parameters: {known})")]
+    BadKey {
+        /// the input
+        input: String,
+        /// plugin name
+        plugin: String,
+        /// "has no parameter" or "was given twice"
+        problem: &'static str,
+        /// the key
+        name: String,
+        /// the plugin's parameter names
+        known: String,
+    },
+    /// A value does not parse or is out of range.
+    #[error("terrain spec {input:?}: parameter {param} = {value:?}: {reason} (expected {expects})")]
+    BadValue {
+        /// the input
+        input: String,
+        /// parameter name
+        param: String,
+        /// the text given
+        value: String,
+        /// what is wrong
+        reason: String,
+        /// what the parameter expects
+        expects: &'static str,
+    },
+    /// The values parse but do not make a terrain (e.g. depth beyond travel).
+    #[error("terrain spec {input:?}: {reason}")]
+    Invalid {
+        /// the input
+        input: String,
+        /// what is wrong
+        reason: String,
+    },
+}

@@ -1,0 +1,291 @@
+//! Tests of the registry, the spec grammar and the built-in terrains.
+
+use proptest::prelude::*;
+use rapier3d::prelude::*;
+
+use crate::spec::Surface;
+use crate::*;
+
+fn parse(s: &str) -> Result<TerrainSpec, SpecError> {
+    Registry::builtin().parse(s)
+}
+
+#[test]
+fn builtin_specs_parse_to_si_values() {
+    let spec = parse("elastic:5cm").unwrap();
+    assert_eq!(spec.plugin(), "elastic");
+    assert_eq!(spec.length_m("depth"), 0.05);
+    assert_eq!(spec.length_m("tile"), 0.2);
+    assert_eq!(parse("elastic:50mm").unwrap(), spec);
+    assert_eq!(parse("elastic:0.05m").unwrap(), spec);
+
+    let varying = parse("varying:2m:2,3,4,5cm,rigid").unwrap();
+    assert_eq!(varying.length_m("every"), 2.0);
+    assert_eq!(
+        varying.surfaces("surfaces"),
+        &[
+            Surface::Elastic { depth_m: 0.02 },
+            Surface::Elastic { depth_m: 0.03 },
+            Surface::Elastic { depth_m: 0.04 },
+            Surface::Elastic { depth_m: 0.05 },
+            Surface::Rigid
+        ]
+    );
+    let named = parse("elastic:3cm:travel=12cm:length=40m").unwrap();
+    assert_eq!(named.length_m("travel"), 0.12);
+    assert_eq!(named.length_m("length"), 40.0);
+    assert_eq!(parse("rigid").unwrap().plugin(), "rigid");
+}
+
+#[test]
+fn display_is_canonical_and_round_trips() {
+    for (input, canonical) in [
+        ("elastic:50mm", "elastic:5cm"),
+        ("rigid", "rigid"),
+        (
+            "varying:200cm:2,3,4,5cm,rigid",
+            "varying:2m:2cm,3cm,4cm,5cm,rigid",
+        ),
+        (
+            "elastic:5cm:tile=20cm:travel=12cm",
+            "elastic:5cm:travel=12cm",
+        ),
+    ] {
+        let spec = parse(input).unwrap();
+        assert_eq!(spec.to_string(), canonical);
+        assert_eq!(parse(&spec.to_string()).unwrap(), spec);
+    }
+}
+
+#[test]
+fn table_form_shares_the_validation() {
+    let registry = Registry::builtin();
+    let entries = vec![
+        ("depth".to_string(), "5cm".to_string()),
+        ("travel".to_string(), "12cm".to_string()),
+    ];
+    let spec = registry
+        .parse_table("[terrain]", "elastic", &entries)
+        .unwrap();
+    assert_eq!(spec, parse("elastic:5cm:travel=12cm").unwrap());
+    let bad = vec![("depth".to_string(), "20cm".to_string())];
+    let err = registry
+        .parse_table("[terrain]", "elastic", &bad)
+        .unwrap_err();
+    assert!(err.to_string().contains("beyond the tile travel"), "{err}");
+    let missing = registry
+        .parse_table("[terrain]", "elastic", &[])
+        .unwrap_err();
+    assert!(matches!(missing, SpecError::Arity { .. }), "{missing}");
+}
+
+#[test]
+fn errors_keep_the_input_and_say_what_is_wrong() {
+    let cases: &[(&str, &str)] = &[
+        ("", "empty"),
+        (
+            "sand:5cm",
+            "unknown terrain \"sand\" (known terrains: rigid, elastic, varying)",
+        ),
+        ("elastic", "takes 1 positional argument(s), got 0"),
+        ("elastic:5cm:3cm", "takes 1 positional argument(s), got 2"),
+        ("rigid:5cm", "takes 0 positional argument(s), got 1"),
+        ("elastic:5", "has no unit"),
+        ("elastic:5xm", "unknown unit \"xm\""),
+        ("elastic:abc", "no number"),
+        ("elastic:0cm", "greater than zero"),
+        ("elastic:-2cm", "greater than zero"),
+        ("elastic:NaNcm", "no number"),
+        ("elastic:1e400cm", "not a finite number"),
+        ("varying:2m:", "the list is empty"),
+        ("varying:2m:2,,3cm", "is empty"),
+        ("varying:2m:2,3", "no unit"),
+        ("elastic:20cm", "beyond the tile travel 15cm"),
+        ("varying:2m:2cm,rigid,30cm", "beyond the tile travel"),
+        ("elastic:5cm:foo=1", "has no parameter \"foo\""),
+        ("elastic:5cm:travel=1cm:travel=2cm", "twice"),
+        ("elastic:5cm:damping=-1", "must not be negative"),
+        ("elastic:5cm:gap=30cm", "gap 30cm must be smaller"),
+        ("varying:5cm:2cm", "shorter than one tile"),
+    ];
+    for (input, expected) in cases {
+        let err = parse(input).expect_err(input).to_string();
+        assert!(
+            err.contains(expected),
+            "{input:?} gave {err:?}, expected it to mention {expected:?}"
+        );
+        assert!(
+            err.contains(&format!("{input:?}")),
+            "{err:?} does not quote the input {input:?}"
+        );
+    }
+}
+
+#[test]
+fn registry_refuses_duplicate_and_bad_names() {
+    struct Named(&'static str);
+    impl TerrainPlugin for Named {
+        fn name(&self) -> &'static str {
+            self.0
+        }
+        fn summary(&self) -> &'static str {
+            "test"
+        }
+        fn params(&self) -> Vec<ParamDecl> {
+            Vec::new()
+        }
+        fn create(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {
+            crate::rigid::RigidPlugin.create(spec, ctx)
+        }
+    }
+    let mut registry = Registry::builtin();
+    assert_eq!(
+        registry.register(Box::new(Named("elastic"))),
+        Err(RegistryError::Duplicate("elastic".to_string()))
+    );
+    assert!(matches!(
+        registry.register(Box::new(Named("Bad Name"))),
+        Err(RegistryError::BadName(_))
+    ));
+    registry.register(Box::new(Named("flat"))).unwrap();
+    assert_eq!(registry.parse("flat").unwrap().plugin(), "flat");
+}
+
+proptest! {
+    #[test]
+    fn no_input_makes_the_parser_panic(input in any::<String>()) {
+        let _ = parse(&input);
+    }
+
+    #[test]
+    fn spec_like_input_never_panics(input in "[a-z0-9.,:=+-]{0,40}") {
+        let _ = parse(&input);
+    }
+
+    #[test]
+    fn valid_specs_round_trip(
+        depth_mm in 1u32..150,
+        every_dm in 2u32..200,
+        picks in prop::collection::vec(prop_oneof![Just(None), (1u32..150).prop_map(Some)], 1..6),
+        travel_mm in prop::option::of(150u32..400),
+    ) {
+        let travel = travel_mm.map(|t| format!(":travel={t}mm")).unwrap_or_default();
+        let elastic = parse(&format!("elastic:{depth_mm}mm{travel}")).unwrap();
+        prop_assert_eq!(parse(&elastic.to_string()).unwrap(), elastic.clone());
+
+        let list: Vec<String> = picks.iter().map(|p| p.map_or("rigid".to_string(), |mm| format!("{mm}mm"))).collect();
+        let varying = parse(&format!("varying:{every_dm}dm:{}", list.join(",")).replace("dm", "0cm")).unwrap();
+        prop_assert_eq!(parse(&varying.to_string()).unwrap(), varying);
+    }
+}
+
+fn world_with(spec: &str, seed: u64) -> (PhysicsWorld, Box<dyn Terrain>) {
+    let ctx = BuildContext {
+        seed,
+        ..BuildContext::default()
+    };
+    let mut terrain = Registry::builtin().create(spec, &ctx).unwrap();
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::new(0.0, 0.0, -9.81);
+    world.integration_parameters.dt = 1.0 / 240.0;
+    terrain.build(&mut world);
+    (world, terrain)
+}
+
+#[test]
+fn stiffness_follows_the_papers_definition() {
+    let ctx = BuildContext::default();
+    let terrain = Registry::builtin().create("elastic:5cm", &ctx).unwrap();
+    let k = terrain.regions()[0].stiffness_n_per_m.unwrap();
+    // k = m g / (4 d): the four loaded springs carry the robot's weight.
+    assert!((k - 25.567 * 9.81 / 0.2).abs() < 1e-9);
+    assert_eq!(terrain.regions()[0].expected_sink_m, 0.05);
+}
+
+#[test]
+fn a_tile_pressed_and_released_returns_to_rest_within_a_second() {
+    let (mut world, terrain) = world_with("elastic:5cm", 0);
+    let mut tiles = Vec::new();
+    terrain.tiles_in(&world, Rect::around([0.0, 0.0], 0.05), &mut tiles);
+    assert_eq!(tiles.len(), 1);
+    let handle = world
+        .bodies
+        .iter()
+        .find(|(_, b)| {
+            b.is_dynamic() && b.translation().x.abs() < 0.01 && b.translation().y.abs() < 0.01
+        })
+        .unwrap()
+        .0;
+
+    // Press with a quarter of the robot's weight: it sinks the nominal depth.
+    let press_n = 25.567 * 9.81 / 4.0;
+    world.bodies[handle].add_force(Vector::new(0.0, 0.0, -press_n as f32), true);
+    for _ in 0..480 {
+        world.step();
+    }
+    let pressed = -terrain.surface_height_m(&world, 0.0, 0.0);
+    assert!((pressed - 0.05).abs() < 0.002, "pressed sink {pressed}");
+
+    world.bodies[handle].reset_forces(true);
+    let mut back_after_secs = None;
+    for step in 1..=480 {
+        world.step();
+        let sink = -terrain.surface_height_m(&world, 0.0, 0.0);
+        if sink.abs() <= 0.001 && back_after_secs.is_none() {
+            back_after_secs = Some(step as f64 / 240.0);
+        }
+        if sink.abs() > 0.001 {
+            back_after_secs = None; // must stay within 1 mm
+        }
+    }
+    let secs = back_after_secs.expect("the tile never settled within 1 mm of rest");
+    assert!(secs < 1.0, "tile took {secs} s to return");
+}
+
+#[test]
+fn idle_tiles_sleep_and_rest_at_the_surface() {
+    let (mut world, terrain) = world_with("elastic:5cm", 0);
+    for _ in 0..240 {
+        world.step();
+    }
+    let awake = world
+        .bodies
+        .iter()
+        .filter(|(_, b)| b.is_dynamic() && !b.is_sleeping())
+        .count();
+    assert_eq!(awake, 0, "untouched tiles must stay asleep");
+    assert_eq!(terrain.tile_count(), 100 * 15);
+    for (x, y) in [(0.0, 0.0), (5.1, 0.4), (-1.0, 1.2)] {
+        assert!(terrain.surface_height_m(&world, x, y).abs() < 1e-6);
+    }
+    // Off the field: the fixed base below.
+    assert!((terrain.surface_height_m(&world, 0.0, 5.0) + 0.2).abs() < 1e-9);
+}
+
+#[test]
+fn varying_regions_follow_the_seed_and_start_with_the_first_surface() {
+    let (world, terrain) = world_with("varying:2m:2,3,4,5cm,rigid", 7);
+    let regions = terrain.regions();
+    assert_eq!(regions[0].label, "elastic:2cm");
+    assert!(regions.len() >= 9, "{} regions", regions.len());
+    // Region boundaries every 2 m (between tile columns) and lookups agree.
+    for r in &regions[1..] {
+        assert!((r.x_range_m.1 - r.x_range_m.0 - 2.0).abs() < 1e-9 || r.index == regions.len() - 1);
+        let mid = (r.x_range_m.0 + r.x_range_m.1) / 2.0;
+        assert_eq!(terrain.region_index_at(mid, 0.0), r.index);
+    }
+    // Same seed, same draw; another seed, another draw somewhere.
+    let (_, again) = world_with("varying:2m:2,3,4,5cm,rigid", 7);
+    assert_eq!(again.regions(), regions);
+    let (_, other) = world_with("varying:2m:2,3,4,5cm,rigid", 8);
+    assert_ne!(other.regions(), regions);
+    // Rigid regions have no tiles and a surface at z = 0.
+    let mut tiles = Vec::new();
+    terrain.tiles_in(&world, terrain.extent(), &mut tiles);
+    assert_eq!(tiles.len(), 100 * 15);
+    let rigid_cells = tiles
+        .iter()
+        .filter(|t| regions[t.region].stiffness_n_per_m.is_none())
+        .count();
+    assert_eq!(terrain.tile_count(), 100 * 15 - rigid_cells);
+}

@@ -1,0 +1,520 @@
+//! A field of spring-loaded tiles: the body of the `elastic` and `varying`
+//! terrains.
+//!
+//! Each tile is a box whose top rests at z = 0, joined to a fixed base by a
+//! vertical prismatic joint. The joint's force-based position motor is the
+//! spring: force = k (q_rest - q) - c q', with q_rest set so that the spring
+//! also carries the tile's own weight (so an unloaded tile rests exactly at
+//! z = 0 against its upper stop and sinks only under load). The joint's
+//! travel is limited to [-travel, 0].
+//!
+//! Stiffness (the paper's definition): the spring is set so that the mean
+//! sink of the four tiles under the feet of the robot standing still equals
+//! the named depth d. At rest the four springs carry the robot's weight, so
+//! sum_i k s_i = m g and mean(s_i) = m g / (4 k) = d, i.e. k = m g / (4 d).
+//!
+//! Damping: c = 2 zeta sqrt(k m_eff) with m_eff = tile mass + a quarter of
+//! the supported mass (the mass one loaded tile carries), so zeta is the
+//! damping ratio of a loaded tile.
+//!
+//! Idle tiles cost no physics time: tiles are inserted asleep, each is its own
+//! island (the base is fixed), and rapier only wakes those the robot touches;
+//! they fall asleep again once still.
+//!
+//! Layout: tile centres lie on multiples of the tile pitch (so a robot placed
+//! at a whole number of pitches stands with its feet near tile centres);
+//! columns run along x from `-back` to `length - back`, rows across a width
+//! centred on y = 0.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rapier3d::prelude::*;
+
+use crate::spec::{ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
+use crate::units::format_length;
+use crate::{BuildContext, Rect, Region, Terrain, TileState, terrain_collision_groups};
+
+/// Thickness of a tile, metres.
+pub const TILE_THICKNESS_M: f64 = 0.05;
+/// Friction coefficient of tile and ground surfaces (the Laikago model's
+/// lateral friction is 1.0 too).
+pub const GROUND_FRICTION: f32 = 1.0;
+
+/// The optional parameters every tiled terrain takes, with their defaults.
+pub fn tile_param_decls() -> Vec<ParamDecl> {
+    use ParamKind::*;
+    use ParamValue as V;
+    vec![
+        ParamDecl::optional(
+            "tile",
+            Length,
+            V::Length(0.2),
+            "distance between tile centres (pitch), default 20cm",
+        ),
+        ParamDecl::optional(
+            "gap",
+            Length,
+            V::Length(0.002),
+            "gap between neighbouring tiles, default 2mm",
+        ),
+        ParamDecl::optional(
+            "travel",
+            Length,
+            V::Length(0.15),
+            "how far a tile can sink, default 15cm",
+        ),
+        ParamDecl::optional(
+            "damping",
+            Number,
+            V::Number(0.5),
+            "damping ratio of a loaded tile, default 0.5",
+        ),
+        ParamDecl::optional(
+            "tile_mass",
+            Mass,
+            V::Mass(0.5),
+            "mass of one tile, default 0.5kg",
+        ),
+        ParamDecl::optional(
+            "length",
+            Length,
+            V::Length(20.0),
+            "extent along x (walking direction), default 20m",
+        ),
+        ParamDecl::optional(
+            "back",
+            Length,
+            V::Length(2.0),
+            "how far the tiles reach behind x = 0, default 2m",
+        ),
+        ParamDecl::optional(
+            "width",
+            Length,
+            V::Length(3.0),
+            "extent across (y), centred on y = 0, default 3m",
+        ),
+    ]
+}
+
+/// Tile-field parameters in SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TileParams {
+    /// distance between tile centres, m
+    pub pitch_m: f64,
+    /// gap between neighbouring tiles, m
+    pub gap_m: f64,
+    /// maximum sink, m
+    pub travel_m: f64,
+    /// damping ratio of a loaded tile
+    pub damping_ratio: f64,
+    /// mass of one tile, kg
+    pub tile_mass_kg: f64,
+    /// extent along x, m
+    pub length_m: f64,
+    /// extent behind x = 0, m
+    pub back_m: f64,
+    /// extent across, m
+    pub width_m: f64,
+}
+
+impl TileParams {
+    /// Reads the parameters declared by [`tile_param_decls`].
+    pub fn from_spec(spec: &TerrainSpec) -> Self {
+        Self {
+            pitch_m: spec.length_m("tile"),
+            gap_m: spec.length_m("gap"),
+            travel_m: spec.length_m("travel"),
+            damping_ratio: spec.number("damping"),
+            tile_mass_kg: spec.mass_kg("tile_mass"),
+            length_m: spec.length_m("length"),
+            back_m: spec.length_m("back"),
+            width_m: spec.length_m("width"),
+        }
+    }
+
+    /// Checks the relations between the parameters and the given depths.
+    pub fn validate(&self, depths_m: impl IntoIterator<Item = f64>) -> Result<(), String> {
+        if self.gap_m >= self.pitch_m {
+            return Err(format!(
+                "gap {} must be smaller than the tile pitch {}",
+                format_length(self.gap_m),
+                format_length(self.pitch_m)
+            ));
+        }
+        if self.length_m < self.pitch_m || self.width_m < self.pitch_m {
+            return Err(format!(
+                "length and width must hold at least one tile of {}",
+                format_length(self.pitch_m)
+            ));
+        }
+        if self.back_m >= self.length_m {
+            return Err(format!(
+                "back {} must be shorter than the length {}",
+                format_length(self.back_m),
+                format_length(self.length_m)
+            ));
+        }
+        let tiles = (self.length_m / self.pitch_m).round() * (self.width_m / self.pitch_m).round();
+        if tiles > 200_000.0 {
+            return Err(format!(
+                "{tiles} tiles is more than the 200000 a world may hold; use fewer or larger tiles"
+            ));
+        }
+        for depth_m in depths_m {
+            if depth_m > self.travel_m {
+                return Err(format!(
+                    "depth {} is beyond the tile travel {} (raise travel=...)",
+                    format_length(depth_m),
+                    format_length(self.travel_m)
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Spring stiffness (N/m) for a sinking depth under `ctx`'s standing robot.
+    pub fn stiffness_n_per_m(depth_m: f64, ctx: &BuildContext) -> f64 {
+        ctx.supported_mass_kg * ctx.gravity_m_per_s2 / (4.0 * depth_m)
+    }
+
+    /// Spring damping (N s/m) for a stiffness, see the module docs.
+    pub fn damping_n_s_per_m(&self, stiffness_n_per_m: f64, ctx: &BuildContext) -> f64 {
+        let loaded_mass_kg = self.tile_mass_kg + ctx.supported_mass_kg / 4.0;
+        2.0 * self.damping_ratio * (stiffness_n_per_m * loaded_mass_kg).sqrt()
+    }
+}
+
+/// How the tile field's columns are grouped into regions.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RegionLayout {
+    /// One surface everywhere.
+    Uniform(Surface),
+    /// The surface changes every `every_m` along x: the region around the
+    /// start (x < every) takes the first surface of the list, each later one
+    /// a surface drawn uniformly from the whole list with the build seed.
+    Varying {
+        /// region length along x, m
+        every_m: f64,
+        /// surfaces to draw from; the first is the starting one
+        surfaces: Vec<Surface>,
+    },
+}
+
+#[derive(Debug, Clone, Copy)]
+struct RegionSprings {
+    stiffness_n_per_m: f64,
+    damping_n_s_per_m: f64,
+}
+
+/// A field of tiles on springs, grouped into regions along x.
+pub struct TiledTerrain {
+    spec: TerrainSpec,
+    params: TileParams,
+    ctx: BuildContext,
+    regions: Vec<Region>,
+    springs: Vec<Option<RegionSprings>>,
+    /// region index of each column
+    column_region: Vec<usize>,
+    columns: usize,
+    rows: usize,
+    first_center_m: [f64; 2],
+    /// one entry per cell, row-major by column: `None` for rigid cells
+    tiles: Vec<Option<RigidBodyHandle>>,
+    built: bool,
+}
+
+impl TiledTerrain {
+    /// Lays out the field; bodies are inserted by [`Terrain::build`].
+    pub fn new(
+        spec: TerrainSpec,
+        params: TileParams,
+        layout: RegionLayout,
+        ctx: &BuildContext,
+    ) -> Self {
+        let pitch = params.pitch_m;
+        let columns = ((params.length_m / pitch).round() as usize).max(1);
+        let rows = ((params.width_m / pitch).round() as usize).max(1);
+        let first_x = (pitch * ((-params.back_m + pitch / 2.0) / pitch).round()).min(0.0);
+        let first_y = -(rows as f64 - 1.0) * pitch / 2.0;
+        let column_x = |ix: usize| first_x + ix as f64 * pitch;
+
+        // Which region each column is in, and each region's surface.
+        let mut region_surfaces: Vec<Surface> = Vec::new();
+        let mut column_region = Vec::with_capacity(columns);
+        match &layout {
+            RegionLayout::Uniform(surface) => {
+                region_surfaces.push(*surface);
+                column_region.resize(columns, 0);
+            }
+            RegionLayout::Varying { every_m, surfaces } => {
+                let mut rng = ChaCha8Rng::seed_from_u64(ctx.seed);
+                for ix in 0..columns {
+                    // Region r holds the columns whose centre lies in [r every, (r+1) every);
+                    // columns behind x = 0 belong to region 0.
+                    let r = (column_x(ix) / every_m).floor().max(0.0) as usize;
+                    while region_surfaces.len() <= r {
+                        let surface = if region_surfaces.is_empty() {
+                            surfaces[0]
+                        } else {
+                            surfaces[rng.random_range(0..surfaces.len())]
+                        };
+                        region_surfaces.push(surface);
+                    }
+                    column_region.push(r);
+                }
+            }
+        }
+
+        let half = pitch / 2.0;
+        let mut regions = Vec::new();
+        let mut springs = Vec::new();
+        for (index, surface) in region_surfaces.iter().enumerate() {
+            let first = column_region.iter().position(|&r| r == index).unwrap_or(0);
+            let last = column_region.iter().rposition(|&r| r == index).unwrap_or(0);
+            let x_range_m = (column_x(first) - half, column_x(last) + half);
+            let (label, spring, expected_sink_m) = match *surface {
+                Surface::Rigid => ("rigid".to_string(), None, 0.0),
+                Surface::Elastic { depth_m } => {
+                    let k = TileParams::stiffness_n_per_m(depth_m, ctx);
+                    let c = params.damping_n_s_per_m(k, ctx);
+                    (
+                        format!("elastic:{}", format_length(depth_m)),
+                        Some(RegionSprings {
+                            stiffness_n_per_m: k,
+                            damping_n_s_per_m: c,
+                        }),
+                        depth_m,
+                    )
+                }
+            };
+            regions.push(Region {
+                index,
+                label,
+                x_range_m,
+                stiffness_n_per_m: spring.map(|s| s.stiffness_n_per_m),
+                damping_n_s_per_m: spring.map(|s| s.damping_n_s_per_m),
+                expected_sink_m,
+            });
+            springs.push(spring);
+        }
+
+        Self {
+            spec,
+            params,
+            ctx: ctx.clone(),
+            regions,
+            springs,
+            column_region,
+            columns,
+            rows,
+            first_center_m: [first_x, first_y],
+            tiles: Vec::new(),
+            built: false,
+        }
+    }
+
+    fn center_m(&self, ix: usize, iy: usize) -> [f64; 2] {
+        [
+            self.first_center_m[0] + ix as f64 * self.params.pitch_m,
+            self.first_center_m[1] + iy as f64 * self.params.pitch_m,
+        ]
+    }
+
+    /// The cell (column, row) whose square holds (x, y), if any.
+    fn cell_at(&self, x_m: f64, y_m: f64) -> Option<(usize, usize)> {
+        let fx = ((x_m - self.first_center_m[0]) / self.params.pitch_m).round();
+        let fy = ((y_m - self.first_center_m[1]) / self.params.pitch_m).round();
+        let in_range = |f: f64, n: usize| f >= 0.0 && f < n as f64;
+        (in_range(fx, self.columns) && in_range(fy, self.rows))
+            .then_some((fx as usize, fy as usize))
+    }
+
+    /// Height of the fixed base the tiles hang from (top face), metres.
+    pub fn base_top_m(&self) -> f64 {
+        -(self.params.travel_m + TILE_THICKNESS_M)
+    }
+
+    fn tile_sink_m(&self, world: &PhysicsWorld, handle: RigidBodyHandle) -> f64 {
+        let rest_center_z = -TILE_THICKNESS_M / 2.0;
+        world
+            .bodies
+            .get(handle)
+            .map_or(0.0, |body| rest_center_z - body.translation().z as f64)
+    }
+
+    /// The tile parameters.
+    pub fn params(&self) -> &TileParams {
+        &self.params
+    }
+}
+
+impl Terrain for TiledTerrain {
+    fn spec(&self) -> &TerrainSpec {
+        &self.spec
+    }
+
+    fn build(&mut self, world: &mut PhysicsWorld) {
+        assert!(!self.built, "a terrain is built into one world, once");
+        self.built = true;
+        let p = self.params;
+        let extent = self.extent();
+        let base = world.insert_body(RigidBodyBuilder::fixed());
+
+        // The fixed base under the whole field, and beyond it.
+        let base_top = self.base_top_m();
+        let margin = 50.0;
+        let half_x = (extent.max_m[0] - extent.min_m[0]) / 2.0 + margin;
+        let half_y = (extent.max_m[1] - extent.min_m[1]) / 2.0 + margin;
+        let floor = ColliderBuilder::cuboid(half_x as f32, half_y as f32, 0.5)
+            .translation(Vector::new(
+                ((extent.min_m[0] + extent.max_m[0]) / 2.0) as f32,
+                0.0,
+                (base_top - 0.5) as f32,
+            ))
+            .friction(GROUND_FRICTION)
+            .collision_groups(terrain_collision_groups());
+        world.insert_collider(floor, Some(base));
+
+        // Rigid regions: one solid block per region, top at z = 0.
+        let depth_below = p.travel_m + TILE_THICKNESS_M;
+        for (region, spring) in self.regions.iter().zip(&self.springs) {
+            if spring.is_none() {
+                let (x0, x1) = region.x_range_m;
+                let block = ColliderBuilder::cuboid(
+                    ((x1 - x0) / 2.0) as f32,
+                    ((extent.max_m[1] - extent.min_m[1]) / 2.0) as f32,
+                    (depth_below / 2.0) as f32,
+                )
+                .translation(Vector::new(
+                    ((x0 + x1) / 2.0) as f32,
+                    0.0,
+                    (-depth_below / 2.0) as f32,
+                ))
+                .friction(GROUND_FRICTION)
+                .collision_groups(terrain_collision_groups());
+                world.insert_collider(block, Some(base));
+            }
+        }
+
+        // Elastic cells: a sleeping box on a sprung prismatic joint.
+        let side = p.pitch_m - p.gap_m;
+        let g = self.ctx.gravity_m_per_s2;
+        self.tiles = Vec::with_capacity(self.columns * self.rows);
+        for ix in 0..self.columns {
+            let springs = self.springs[self.column_region[ix]];
+            for iy in 0..self.rows {
+                let Some(s) = springs else {
+                    self.tiles.push(None);
+                    continue;
+                };
+                let [cx, cy] = self.center_m(ix, iy);
+                let rest = Vector::new(cx as f32, cy as f32, (-TILE_THICKNESS_M / 2.0) as f32);
+                let body = RigidBodyBuilder::dynamic().translation(rest).sleeping(true);
+                let handle = world.insert_body(body);
+                let collider = ColliderBuilder::cuboid(
+                    (side / 2.0) as f32,
+                    (side / 2.0) as f32,
+                    (TILE_THICKNESS_M / 2.0) as f32,
+                )
+                .mass(p.tile_mass_kg as f32)
+                .friction(GROUND_FRICTION)
+                .collision_groups(terrain_collision_groups());
+                world.insert_collider(collider, Some(handle));
+                // Spring target above rest so that at q = 0 the spring holds the tile's weight.
+                let preload_m = p.tile_mass_kg * g / s.stiffness_n_per_m;
+                let joint = PrismaticJointBuilder::new(Vector::Z)
+                    .local_anchor1(rest)
+                    .local_anchor2(Vector::ZERO)
+                    .limits([-p.travel_m as f32, 0.0])
+                    .motor_model(MotorModel::ForceBased)
+                    .motor_position(
+                        preload_m as f32,
+                        s.stiffness_n_per_m as f32,
+                        s.damping_n_s_per_m as f32,
+                    );
+                world.impulse_joints.insert(base, handle, joint, false);
+                self.tiles.push(Some(handle));
+            }
+        }
+    }
+
+    fn surface_height_m(&self, world: &PhysicsWorld, x_m: f64, y_m: f64) -> f64 {
+        match self.cell_at(x_m, y_m) {
+            None => self.base_top_m(),
+            Some((ix, iy)) => match self.tiles.get(ix * self.rows + iy).copied().flatten() {
+                Some(handle) => -self.tile_sink_m(world, handle),
+                None => 0.0,
+            },
+        }
+    }
+
+    fn regions(&self) -> &[Region] {
+        &self.regions
+    }
+
+    fn region_index_at(&self, x_m: f64, _y_m: f64) -> usize {
+        let f = ((x_m - self.first_center_m[0]) / self.params.pitch_m).round();
+        let ix = f.clamp(0.0, (self.columns - 1) as f64) as usize;
+        self.column_region[ix]
+    }
+
+    fn tiles_in(&self, world: &PhysicsWorld, area: Rect, out: &mut Vec<TileState>) {
+        let p = self.params.pitch_m;
+        let index_range = |min: f64, max: f64, first: f64, n: usize| {
+            let lo = ((min - first) / p).ceil().max(0.0);
+            let hi = ((max - first) / p).floor().min(n as f64 - 1.0);
+            if hi < lo {
+                0..0
+            } else {
+                lo as usize..hi as usize + 1
+            }
+        };
+        let xs = index_range(
+            area.min_m[0],
+            area.max_m[0],
+            self.first_center_m[0],
+            self.columns,
+        );
+        let ys = index_range(
+            area.min_m[1],
+            area.max_m[1],
+            self.first_center_m[1],
+            self.rows,
+        );
+        for ix in xs {
+            for iy in ys.clone() {
+                let sink_m = match self.tiles.get(ix * self.rows + iy).copied().flatten() {
+                    Some(handle) => self.tile_sink_m(world, handle),
+                    None => 0.0,
+                };
+                out.push(TileState {
+                    center_m: self.center_m(ix, iy),
+                    side_m: p - self.params.gap_m,
+                    sink_m,
+                    region: self.column_region[ix],
+                });
+            }
+        }
+    }
+
+    fn extent(&self) -> Rect {
+        let half = self.params.pitch_m / 2.0;
+        let last = self.center_m(self.columns - 1, self.rows - 1);
+        Rect {
+            min_m: [self.first_center_m[0] - half, self.first_center_m[1] - half],
+            max_m: [last[0] + half, last[1] + half],
+        }
+    }
+
+    fn tile_count(&self) -> usize {
+        self.column_region
+            .iter()
+            .filter(|&&r| self.springs[r].is_some())
+            .count()
+            * self.rows
+    }
+
+    fn tile_geometry_m(&self) -> Option<(f64, f64)> {
+        Some((self.params.pitch_m - self.params.gap_m, self.params.pitch_m))
+    }
+}

@@ -1,0 +1,67 @@
+//! `varying:<every>:<surfaces>`: the terrain type changes every `every`
+//! metres along x (the paper's T_v2 and T_v8). The region around the start
+//! takes the first surface of the list (the paper starts training on 2 cm);
+//! every later region draws one surface uniformly from the whole list with
+//! the world's seed. `rigid` may appear in the list:
+//! `varying:2m:2,3,4,5cm,rigid`.
+
+use crate::spec::{ParamDecl, ParamKind, Surface, TerrainSpec};
+use crate::tiles::{RegionLayout, TileParams, TiledTerrain, tile_param_decls};
+use crate::units::format_length;
+use crate::{BuildContext, Terrain, TerrainPlugin};
+
+/// The `varying` plugin.
+pub struct VaryingPlugin;
+
+impl TerrainPlugin for VaryingPlugin {
+    fn name(&self) -> &'static str {
+        "varying"
+    }
+
+    fn summary(&self) -> &'static str {
+        "terrain type changes every <every> along x, drawn from <surfaces> (e.g. varying:2m:2,3,4,5cm,rigid)"
+    }
+
+    fn params(&self) -> Vec<ParamDecl> {
+        let mut params = vec![
+            ParamDecl::required("every", ParamKind::Length, "length of each region along x"),
+            ParamDecl::required(
+                "surfaces",
+                ParamKind::Surfaces,
+                "depths and `rigid` to draw from; the first is where the robot starts",
+            ),
+        ];
+        params.extend(tile_param_decls());
+        params
+    }
+
+    fn validate(&self, spec: &TerrainSpec) -> Result<(), String> {
+        let params = TileParams::from_spec(spec);
+        let every_m = spec.length_m("every");
+        if every_m < params.pitch_m {
+            return Err(format!(
+                "regions of {} are shorter than one tile ({})",
+                format_length(every_m),
+                format_length(params.pitch_m)
+            ));
+        }
+        let depths = spec.surfaces("surfaces").iter().filter_map(|s| match s {
+            Surface::Elastic { depth_m } => Some(*depth_m),
+            Surface::Rigid => None,
+        });
+        params.validate(depths)
+    }
+
+    fn create(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {
+        let layout = RegionLayout::Varying {
+            every_m: spec.length_m("every"),
+            surfaces: spec.surfaces("surfaces").to_vec(),
+        };
+        Box::new(TiledTerrain::new(
+            spec.clone(),
+            TileParams::from_spec(spec),
+            layout,
+            ctx,
+        ))
+    }
+}

@@ -8,6 +8,9 @@ use anyhow::Result;
 use clap::Args;
 use serde_json::json;
 
+use robot::scripted::ScriptedCrawl;
+use robot::task::{Task, TaskConfig};
+
 use crate::commands::{load_robot, make_world, parse_spec, positive_seconds};
 
 /// The default scenes: rigid ground, the paper's elastic scene (15 x 5 tiles
@@ -33,6 +36,9 @@ pub struct BenchArgs {
     /// Timed runs per measurement; the median is reported (shared machines are noisy)
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
     repeat: u32,
+    /// Phases each world runs for the phase-rate measurement (0 skips it)
+    #[arg(long, default_value_t = 40)]
+    phases: u32,
     /// Print one JSON object instead of a table
     #[arg(long)]
     json: bool,
@@ -123,6 +129,63 @@ fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement>
     })
 }
 
+/// Phases per second: each world runs the scripted crawl through the task
+/// (IK for 180 samples, PD control, 180 physics steps, observation, reward),
+/// starting a new episode whenever one ends. Episode resets are not timed.
+fn measure_phases(spec: &str, threads: usize, phases: u32) -> Result<f64> {
+    let spec = parse_spec(spec)?;
+    let model = load_robot(None)?;
+    let barrier = Arc::new(Barrier::new(threads + 1));
+    let elapsed = std::thread::scope(|scope| -> Result<f64> {
+        let mut handles = Vec::new();
+        for t in 0..threads {
+            let barrier = barrier.clone();
+            let model = model.clone();
+            let spec = &spec;
+            handles.push(scope.spawn(move || -> Result<f64> {
+                let world = make_world(spec, model, t as u64, [0.0, 0.0]);
+                let world = match world {
+                    Ok(w) => w,
+                    Err(e) => {
+                        barrier.wait();
+                        return Err(e);
+                    }
+                };
+                let mut task = Task::new(world, TaskConfig::default(), t as u64);
+                let crawl = ScriptedCrawl::default();
+                let mut obs = vec![0.0f32; task.observation_size()];
+                task.reset(&mut obs);
+                barrier.wait();
+                // Only whole phases (180 steps) count; a phase cut short by a
+                // termination is neither timed nor counted.
+                let (mut timed, mut whole) = (0.0, 0u32);
+                while whole < phases {
+                    if task.done() {
+                        task.reset(&mut obs);
+                    }
+                    let start = Instant::now();
+                    let outcome = task.step_phase(&crawl.action(task.phase()), &mut obs);
+                    if outcome.steps == robot::action::SAMPLES_PER_PHASE {
+                        timed += start.elapsed().as_secs_f64();
+                        whole += 1;
+                    }
+                }
+                Ok(timed)
+            }));
+        }
+        barrier.wait();
+        let mut slowest: f64 = 0.0;
+        for handle in handles {
+            let timed = handle
+                .join()
+                .map_err(|_| anyhow::anyhow!("a bench thread panicked"))??;
+            slowest = slowest.max(timed);
+        }
+        Ok(slowest)
+    })?;
+    Ok((phases as usize * threads) as f64 / elapsed)
+}
+
 pub fn run(args: &BenchArgs) -> Result<()> {
     let terrains: Vec<String> = if args.terrains.is_empty() {
         DEFAULT_TERRAINS.iter().map(ToString::to_string).collect()
@@ -142,6 +205,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     let mut results = Vec::new();
+    let mut phase_rates = Vec::new();
     for spec in &terrains {
         for &n in &threads {
             let m = measure(spec, n, args.seconds, args.repeat)?;
@@ -155,6 +219,20 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     m.steps_per_s / m.threads as f64
                 );
             }
+            if args.phases > 0 {
+                let phases_per_s = measure_phases(spec, n, args.phases)?;
+                if !args.json {
+                    out!(
+                        "{:<48} {:>6} {:>2} thread(s)  {:>9.1} phases/s  {:>8.1} ms per phase per world",
+                        m.terrain,
+                        "",
+                        n,
+                        phases_per_s,
+                        1000.0 * n as f64 / phases_per_s
+                    );
+                }
+                phase_rates.push((m.terrain.clone(), n, phases_per_s));
+            }
             results.push(m);
         }
     }
@@ -166,6 +244,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     .iter()
                     .find(|o| o.terrain == m.terrain && o.threads == 1)
                     .map(|o| o.steps_per_s);
+                let phases_per_s = phase_rates
+                    .iter()
+                    .find(|(t, n, _)| *t == m.terrain && *n == m.threads)
+                    .map(|(_, _, p)| *p);
                 json!({
                     "terrain": m.terrain,
                     "tiles": m.tiles,
@@ -174,6 +256,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     "steps_per_s_per_world": m.steps_per_s / m.threads as f64,
                     "speedup_vs_1_thread": single.map(|s| m.steps_per_s / s),
                     "runs_steps_per_s": m.runs_steps_per_s,
+                    "phases_per_s": phases_per_s,
+                    "ms_per_phase_per_world": phases_per_s.map(|p| 1000.0 * m.threads as f64 / p),
                 })
             })
             .collect();

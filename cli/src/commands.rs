@@ -150,7 +150,10 @@ pub fn terrain_show(spec: &str, robot: Option<&Path>, seed: u64, as_json: bool) 
     let e = terrain.extent();
     out!(
         "extent       x {:.2}..{:.2} m, y {:.2}..{:.2} m",
-        e.min_m[0], e.max_m[0], e.min_m[1], e.max_m[1]
+        e.min_m[0],
+        e.max_m[0],
+        e.min_m[1],
+        e.max_m[1]
     );
     out!("regions      {}", terrain.regions().len());
     for r in terrain.regions() {
@@ -202,7 +205,7 @@ pub struct StandArgs {
 
 pub fn stand(args: &StandArgs) -> Result<()> {
     let spec = match (&args.config, &args.terrain) {
-        (Some(path), _) => crate::config::terrain_from_file(path)?,
+        (Some(path), _) => crate::config::Experiment::from_file(path)?.terrain,
         (None, Some(spec)) => parse_spec(spec)?,
         (None, None) => parse_spec("elastic:5cm")?,
     };
@@ -236,7 +239,8 @@ pub fn stand(args: &StandArgs) -> Result<()> {
         );
         out!(
             "stood               {:.2} s ({} steps)",
-            report.seconds, report.steps
+            report.seconds,
+            report.steps
         );
         out!("base height         {:.4} m", report.base_height_m);
         out!(

@@ -16,6 +16,7 @@ macro_rules! out {
 mod bench;
 mod commands;
 mod config;
+mod rollout;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -37,6 +38,8 @@ enum Command {
     Terrain(TerrainCommand),
     /// Let the robot stand in its squat on a terrain and report how it settles.
     Stand(commands::StandArgs),
+    /// Run a policy (the scripted crawl) for a number of phases and report distance, height, reward.
+    Rollout(rollout::RolloutArgs),
     /// Measure physics steps per second of the robot standing, one world per thread.
     Bench(bench::BenchArgs),
 }
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
             json,
         }) => commands::terrain_show(&spec, robot.as_deref(), seed, json),
         Command::Stand(args) => commands::stand(&args),
+        Command::Rollout(args) => rollout::run(&args),
         Command::Bench(args) => bench::run(&args),
     };
     match result {

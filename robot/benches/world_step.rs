@@ -10,10 +10,18 @@ use terrain_plugins::{BuildContext, Registry};
 
 fn main() {
     let model = Arc::new(RobotModel::laikago());
-    let ctx = BuildContext { supported_mass_kg: model.total_mass_kg(), ..BuildContext::default() };
-    for spec in ["rigid", "elastic:5cm:length=3m:back=1.5m:width=1m", "elastic:5cm"] {
+    let ctx = BuildContext {
+        supported_mass_kg: model.total_mass_kg(),
+        ..BuildContext::default()
+    };
+    for spec in [
+        "rigid",
+        "elastic:5cm:length=3m:back=1.5m:width=1m",
+        "elastic:5cm",
+    ] {
         let terrain = Registry::builtin().create(spec, &ctx).expect("valid spec");
-        let mut world = World::new(model.clone(), terrain, WorldConfig::default(), [0.0, 0.0]).expect("robot fits");
+        let mut world = World::new(model.clone(), terrain, WorldConfig::default(), [0.0, 0.0])
+            .expect("robot fits");
         for _ in 0..240 {
             world.step();
         }
@@ -23,6 +31,10 @@ fn main() {
             world.step();
         }
         let secs = start.elapsed().as_secs_f64();
-        println!("{spec:<45} {:>8.0} steps/s  ({:.1} us/step)", steps as f64 / secs, secs / steps as f64 * 1e6);
+        println!(
+            "{spec:<45} {:>8.0} steps/s  ({:.1} us/step)",
+            steps as f64 / secs,
+            secs / steps as f64 * 1e6
+        );
     }
 }

@@ -1,11 +1,14 @@
 //! quadwalk's robot: the model (URDF), leg kinematics and IK, PD control and
 //! the physics world that puts the robot on a terrain.
 
+pub mod action;
 pub mod kinematics;
 pub mod mesh;
 pub mod model;
+pub mod scripted;
 pub mod seam;
 pub mod stand;
+pub mod task;
 pub mod world;
 
 pub use kinematics::{IkSolution, KinematicsError, LegKinematics};

@@ -7,7 +7,11 @@
 //! a root body with four chains of three revolute (or continuous) joints,
 //! abduction then hip pitch then knee, each chain ending in a sphere (the
 //! foot). Legs are named by where their abduction joint sits (front/rear by
-//! x, left/right by y, base frame).
+//! x, left/right by y, base frame). The foot (the paper's end-effector) is
+//! the leg's last body: the lower leg with its toe. Its position is the toe
+//! sphere's centre; any of its shapes touching the ground is a foot contact
+//! (the third-party Laikago's lower-leg mesh reaches the toe, so a rule that
+//! only counted the toe sphere would end every episode on it).
 //!
 //! Frames: the base frame is the root link's frame (x forward, y left,
 //! z up). All quantities are SI.
@@ -147,7 +151,9 @@ pub struct CollisionShape {
     pub geometry: Geometry,
     /// the URDF link it came from
     pub link: String,
-    /// whether it is a foot (a leg's toe sphere)
+    /// the URDF collision element's name, if any
+    pub name: Option<String>,
+    /// whether it is part of a foot (any shape of a leg's last body)
     pub is_foot: bool,
 }
 
@@ -363,14 +369,8 @@ impl RobotModel {
         let mut legs = legs;
         for leg in &mut legs {
             leg.joints = leg.joints.map(|j| new_index[j]);
-            let foot = &mut bodies[leg.foot_body];
-            let centre = leg.foot_in_body_m;
-            for shape in &mut foot.collisions {
-                if matches!(shape.geometry, Geometry::Sphere { .. })
-                    && (shape.shape_in_body.translation.vector - centre).norm() < 1e-9
-                {
-                    shape.is_foot = true;
-                }
+            for shape in &mut bodies[leg.foot_body].collisions {
+                shape.is_foot = true;
             }
         }
         Ok(Self {
@@ -528,6 +528,7 @@ fn add_link(
                 shape_in_body,
                 geometry,
                 link: link.name.clone(),
+                name: collision.name.clone(),
                 is_foot: false,
             });
         }
@@ -689,7 +690,17 @@ mod tests {
                 .iter()
                 .filter(|c| c.is_foot)
                 .count();
-            assert_eq!(feet_shapes, 1);
+            assert_eq!(feet_shapes, 2, "the shank and the toe sphere");
+        }
+    }
+
+    #[test]
+    fn only_the_lower_legs_are_feet() {
+        let model = RobotModel::laikago();
+        let foot_bodies: Vec<usize> = model.legs.iter().map(|l| l.foot_body).collect();
+        for (i, body) in model.bodies.iter().enumerate() {
+            let any_foot = body.collisions.iter().any(|c| c.is_foot);
+            assert_eq!(any_foot, foot_bodies.contains(&i), "{}", body.name);
         }
     }
 

@@ -29,8 +29,8 @@ pub const SQUAT_FOOT_DEPTH_M: f64 = 0.35;
 /// (a narrow stance tips over on 5 cm springs).
 pub const SQUAT_FOOT_WIDTH_M: f64 = 0.2;
 
-/// Two shapes closer than this touch, m. Rapier keeps speculative contacts
-/// up to 2 cm apart; only these closer ones count as touching.
+/// Two shapes closer than this touch, m (rapier also pairs shapes up to
+/// 2 cm apart, for speculative contacts; those do not count).
 pub const TOUCH_DISTANCE_M: f64 = 0.001;
 
 /// Settings of the world.
@@ -68,7 +68,7 @@ pub enum WorldError {
     DegenerateShape(String),
     /// The default squat is out of reach for this robot.
     #[error(
-        "the default squat (feet {SQUAT_FOOT_WIDTH_M} m out, {SQUAT_FOOT_DEPTH_M} m below the base) is out of reach for leg {0}"
+        "the default squat (feet under the hips, {SQUAT_FOOT_WIDTH_M} m out, {SQUAT_FOOT_DEPTH_M} m below the base) is out of reach for leg {0}"
     )]
     SquatUnreachable(&'static str),
 }
@@ -88,8 +88,8 @@ struct RobotHandles {
     multibody: MultibodyIndex,
     /// multibody link id of each actuated joint's child
     joint_links: Vec<usize>,
-    /// (collider, URDF link name, is foot)
-    colliders: Vec<(ColliderHandle, String, bool)>,
+    /// (collider, URDF link name, the leg whose foot it is)
+    colliders: Vec<(ColliderHandle, String, Option<usize>)>,
 }
 
 /// A physics world holding one terrain and one robot.
@@ -176,8 +176,22 @@ impl World {
             ),
             Vector3::z() * yaw_rad,
         );
+        let squat = self.squat_rad.clone();
+        self.place_robot(&base, &squat);
+    }
+
+    /// Puts the robot's base at `base_pose` (world frame) with joint angles
+    /// `q_rad` (joint order), at rest, holding `q_rad` as PD targets. For
+    /// resets and for crafting states in tests; the robot may start in the
+    /// air or in the ground.
+    pub fn place_robot(&mut self, base_pose: &Isometry3<f64>, q_rad: &[f64]) {
+        assert_eq!(
+            q_rad.len(),
+            self.targets_rad.len(),
+            "one angle per actuated joint"
+        );
         let root = self.robot.bodies[0];
-        self.physics.bodies[root].set_position(to_pose(&base), true);
+        self.physics.bodies[root].set_position(to_pose(base_pose), true);
         let multibody = self
             .physics
             .multibody_joints
@@ -187,7 +201,7 @@ impl World {
         for (j, &link_id) in self.robot.joint_links.iter().enumerate() {
             let link = multibody.link(link_id).expect("joint link exists");
             let current = link.joint.coords()[3];
-            displacement[link.assembly_id()] = self.squat_rad[j] as f32 - current;
+            displacement[link.assembly_id()] = q_rad[j] as f32 - current;
         }
         multibody.apply_displacements(&displacement);
         multibody.generalized_velocity_mut().fill(0.0);
@@ -198,9 +212,13 @@ impl World {
             body.set_linvel(Vector::ZERO, true);
             body.set_angvel(Vector::ZERO, true);
         }
-        let squat = self.squat_rad.clone();
-        self.set_joint_targets_rad(&squat);
+        self.set_joint_targets_rad(q_rad);
         self.torques_n_m.fill(0.0);
+    }
+
+    /// Puts the terrain's moving parts back at rest.
+    pub fn reset_terrain(&mut self) {
+        self.terrain.reset(&mut self.physics);
     }
 
     /// Sets the PD position targets (joint order), clamped to the limits.
@@ -327,28 +345,53 @@ impl World {
         up.z.clamp(-1.0, 1.0).acos()
     }
 
-    /// Which robot parts touch the ground now.
+    /// Which robot parts touch the ground now: the exact distance between
+    /// each robot collider and every terrain collider the narrow phase pairs
+    /// it with is at most [`TOUCH_DISTANCE_M`]. (The narrow phase's own
+    /// contact manifolds are not read: with contact recycling their
+    /// distances can be several steps old.)
     pub fn ground_contacts(&self) -> GroundContacts {
+        self.contacts(true)
+    }
+
+    /// The links other than feet that touch the ground now (the termination
+    /// check: feet are not examined).
+    pub fn non_foot_contacts(&self) -> Vec<String> {
+        self.contacts(false).non_foot_links
+    }
+
+    fn contacts(&self, with_feet: bool) -> GroundContacts {
         let mut contacts = GroundContacts::default();
-        for (handle, link, is_foot) in &self.robot.colliders {
+        for (handle, link, foot_leg) in &self.robot.colliders {
+            let known = match foot_leg {
+                Some(leg) => !with_feet || contacts.feet[*leg],
+                None => contacts.non_foot_links.contains(link),
+            };
+            if known {
+                continue;
+            }
+            let collider = &self.physics.colliders[*handle];
             let touching = self.physics.contact_pairs_with(*handle).any(|pair| {
-                pair.find_deepest_contact()
-                    .is_some_and(|(_, contact)| contact.dist as f64 <= TOUCH_DISTANCE_M)
+                let other = if pair.collider1 == *handle {
+                    pair.collider2
+                } else {
+                    pair.collider1
+                };
+                let other = &self.physics.colliders[other];
+                terrain_plugins::rapier3d::parry::query::distance(
+                    collider.position(),
+                    collider.shape(),
+                    other.position(),
+                    other.shape(),
+                )
+                .is_ok_and(|d| d.distance as f64 <= TOUCH_DISTANCE_M)
             });
             if !touching {
                 continue;
             }
-            if *is_foot {
-                if let Some(leg) = self.model.legs.iter().position(|l| {
-                    self.model.bodies[l.foot_body]
-                        .collisions
-                        .iter()
-                        .any(|c| c.is_foot && &c.link == link)
-                }) {
-                    contacts.feet[leg] = true;
-                }
-            } else if !contacts.non_foot_links.contains(link) {
-                contacts.non_foot_links.push(link.clone());
+            match foot_leg {
+                Some(leg) => contacts.feet[*leg] = true,
+                None => contacts.non_foot_links.push(link.clone()),
             }
         }
         contacts
@@ -451,7 +494,11 @@ fn insert_robot(
                 .friction(config.friction as f32)
                 .collision_groups(robot_collision_groups());
             let collider_handle = physics.insert_collider(collider, Some(handle));
-            colliders.push((collider_handle, shape.link.clone(), shape.is_foot));
+            let foot_leg = shape
+                .is_foot
+                .then(|| model.legs.iter().position(|l| l.foot_body == bodies.len()))
+                .flatten();
+            colliders.push((collider_handle, shape.link.clone(), foot_leg));
         }
         bodies.push(handle);
     }

@@ -142,6 +142,9 @@ pub trait Terrain: Send {
     /// Called before every physics step (e.g. to apply custom forces or
     /// recycle tiles). Default: nothing.
     fn before_step(&mut self, _world: &mut PhysicsWorld, _dt_secs: f64) {}
+    /// Puts every moving part back at rest (between episodes). Default:
+    /// nothing (a terrain without moving parts).
+    fn reset(&mut self, _world: &mut PhysicsWorld) {}
     /// Height of the surface right below (x, y), world frame, metres.
     fn surface_height_m(&self, world: &PhysicsWorld, x_m: f64, y_m: f64) -> f64;
     /// The terrain's regions, ordered along x.

@@ -438,6 +438,26 @@ impl Terrain for TiledTerrain {
         }
     }
 
+    fn reset(&mut self, world: &mut PhysicsWorld) {
+        for (index, handle) in self.tiles.iter().enumerate() {
+            let Some(handle) = *handle else { continue };
+            let Some(body) = world.bodies.get_mut(handle) else {
+                continue;
+            };
+            if body.is_sleeping() {
+                continue; // asleep means at rest already
+            }
+            let [cx, cy] = self.center_m(index / self.rows, index % self.rows);
+            body.set_translation(
+                Vector::new(cx as f32, cy as f32, (-TILE_THICKNESS_M / 2.0) as f32),
+                false,
+            );
+            body.set_linvel(Vector::ZERO, false);
+            body.set_angvel(Vector::ZERO, false);
+            body.sleep();
+        }
+    }
+
     fn surface_height_m(&self, world: &PhysicsWorld, x_m: f64, y_m: f64) -> f64 {
         match self.cell_at(x_m, y_m) {
             None => self.base_top_m(),

@@ -305,15 +305,42 @@ fn stand_reads_the_terrain_from_a_toml_file() {
     let dir = std::env::temp_dir().join(format!("quadwalk-e2e-toml-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let good = dir.join("stand.toml");
-    std::fs::write(&good, "[terrain]\nplugin = \"elastic\"\ndepth = \"2cm\"\nlength = \"3m\"\nback = \"1.5m\"\n").unwrap();
-    let r = json_of(&["stand", "--config", good.to_str().unwrap(), "--seconds", "4", "--json"]);
+    std::fs::write(
+        &good,
+        "[terrain]\nplugin = \"elastic\"\ndepth = \"2cm\"\nlength = \"3m\"\nback = \"1.5m\"\n",
+    )
+    .unwrap();
+    let r = json_of(&[
+        "stand",
+        "--config",
+        good.to_str().unwrap(),
+        "--seconds",
+        "4",
+        "--json",
+    ]);
     assert_eq!(r["terrain"], "elastic:2cm:length=3m:back=1.5m", "{r}");
     assert!((f(&r, "mean_loaded_sink_m") - 0.02).abs() < 0.002, "{r}");
     let bad = dir.join("bad.toml");
-    std::fs::write(&bad, "[terrain]\nspec = \"elastic:2cm\"\ncolour = \"red\"\n").unwrap();
+    std::fs::write(
+        &bad,
+        "[terrain]\nspec = \"elastic:2cm\"\ncolour = \"red\"\n",
+    )
+    .unwrap();
     let stderr = failure(&["stand", "--config", bad.to_str().unwrap()], 1);
-    assert!(stderr.contains("bad.toml [terrain]") && stderr.contains("colour"), "{stderr}");
-    let stderr = failure(&["stand", "--config", good.to_str().unwrap(), "--terrain", "rigid"], 2);
+    assert!(
+        stderr.contains("bad.toml [terrain]") && stderr.contains("colour"),
+        "{stderr}"
+    );
+    let stderr = failure(
+        &[
+            "stand",
+            "--config",
+            good.to_str().unwrap(),
+            "--terrain",
+            "rigid",
+        ],
+        2,
+    );
     assert!(stderr.contains("cannot be used with"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -332,4 +359,53 @@ fn a_closed_pipe_ends_output_quietly() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert!(out.status.success(), "{stderr}");
+}
+
+#[test]
+fn the_scripted_crawl_walks_four_metres_on_rigid_ground() {
+    let r = json_of(&[
+        "rollout",
+        "--policy",
+        "scripted",
+        "--terrain",
+        "rigid",
+        "--phases",
+        "70",
+        "--json",
+    ]);
+    assert!(f(&r, "distance_m") >= 4.0, "{r}");
+    assert_eq!(r["terminated"], false, "{r}");
+    assert_eq!(r["phases"], 70);
+    let terms = r["reward_terms"].as_object().unwrap();
+    for name in ["distance", "orientation", "height", "torque", "roll"] {
+        assert!(terms[name].as_f64().is_some(), "{name} missing in {r}");
+    }
+    let total: f64 = terms.values().map(|v| v.as_f64().unwrap()).sum();
+    assert!((total - f(&r, "reward_total")).abs() < 1e-9, "{r}");
+    assert!(
+        r["goals_reached"].as_u64().unwrap() >= 2,
+        "two goals 2 m apart passed: {r}"
+    );
+}
+
+#[test]
+fn rollout_reports_termination_and_refuses_unknown_policies() {
+    // The crawl falls on 5 cm tiles within a few phases: reported, not an error.
+    let r = json_of(&[
+        "rollout",
+        "--terrain",
+        "elastic:5cm",
+        "--phases",
+        "20",
+        "--json",
+    ]);
+    assert!(r["terminated"].is_string(), "{r}");
+    assert!(r["phases"].as_u64().unwrap() < 20);
+    let stderr = failure(&["rollout", "--policy", "runs/none"], 1);
+    assert!(
+        stderr.contains("policy \"runs/none\" is not known"),
+        "{stderr}"
+    );
+    let stderr = failure(&["rollout", "--phases", "0"], 2);
+    assert!(stderr.contains("--phases"), "{stderr}");
 }

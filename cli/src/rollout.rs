@@ -1,0 +1,169 @@
+//! `quadwalk rollout`: run a policy on a terrain for a number of phases and
+//! report distance, base height, termination and reward per term.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::Args;
+use robot::scripted::ScriptedCrawl;
+use robot::task::{RewardTerms, Task, TaskConfig};
+use serde_json::json;
+
+use crate::commands::{load_robot, make_world, parse_spec};
+
+/// Arguments of `quadwalk rollout`.
+#[derive(Debug, Args)]
+pub struct RolloutArgs {
+    /// Policy: `scripted` (the documented crawl)
+    #[arg(long, default_value = "scripted")]
+    policy: String,
+    /// Terrain spec [default: elastic:5cm]
+    #[arg(long, conflicts_with = "config")]
+    terrain: Option<String>,
+    /// Experiment file (TOML) with [terrain] and [task] sections
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Robot description (URDF); default: the built-in Laikago
+    #[arg(long)]
+    robot: Option<PathBuf>,
+    /// Phases to run (0.75 s each), unless the episode terminates first
+    #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    phases: u32,
+    /// Seed: start position and the varying terrain's draw
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Print one JSON object instead of text
+    #[arg(long)]
+    json: bool,
+}
+
+/// Summary statistics of a series.
+fn stats(values: &[f64]) -> serde_json::Value {
+    let n = values.len().max(1) as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let std = (values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
+    let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    json!({ "mean": mean, "std": std, "min": min, "max": max })
+}
+
+pub fn run(args: &RolloutArgs) -> Result<()> {
+    let (spec, mut task_config) = match (&args.config, &args.terrain) {
+        (Some(path), _) => {
+            let experiment = crate::config::Experiment::from_file(path)?;
+            (experiment.terrain, experiment.task)
+        }
+        (None, Some(spec)) => (parse_spec(spec)?, TaskConfig::default()),
+        (None, None) => (parse_spec("elastic:5cm")?, TaskConfig::default()),
+    };
+    let crawl = match args.policy.as_str() {
+        "scripted" => ScriptedCrawl::default(),
+        other => bail!(
+            "policy {other:?} is not known (known: scripted; trained checkpoints arrive with `quadwalk train`)"
+        ),
+    };
+    task_config.max_phases = args.phases as usize;
+    let model = load_robot(args.robot.as_deref())?;
+    let world = make_world(&spec, model, args.seed, [0.0, 0.0])?;
+    let mut task = Task::new(world, task_config, args.seed);
+    let mut obs = vec![0.0f32; task.observation_size()];
+    task.reset(&mut obs);
+    let start = task.start_xy_m();
+
+    let mut terms_sum = [0.0f64; 5];
+    let mut reward_sum = 0.0;
+    let mut heights = Vec::new();
+    let (mut min_h, mut max_h) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut termination = None;
+    let mut ik_clamped = 0;
+    let mut regions: Vec<String> = Vec::new();
+    let mut phases = 0;
+    while !task.done() {
+        let action = crawl.action(task.phase());
+        let outcome = task.step_phase(&action, &mut obs);
+        phases += 1;
+        reward_sum += outcome.reward;
+        for (sum, v) in terms_sum.iter_mut().zip(outcome.terms.values()) {
+            *sum += v;
+        }
+        heights.push(outcome.mean_base_height_m);
+        min_h = min_h.min(outcome.base_height_range_m.0);
+        max_h = max_h.max(outcome.base_height_range_m.1);
+        ik_clamped += outcome.ik_clamped;
+        let base = task.world().base_pose().translation.vector;
+        let terrain = task.world().terrain();
+        let label = &terrain.regions()[terrain.region_index_at(base.x, base.y)].label;
+        if regions.last() != Some(label) {
+            regions.push(label.clone());
+        }
+        termination = outcome.termination;
+    }
+    let base = task.world().base_pose().translation.vector;
+    let distance_m = base.x - start[0];
+    let lateral_drift_m = base.y - start[1];
+    let (_, _, yaw) = task.world().base_pose().rotation.euler_angles();
+    let reward_terms: serde_json::Map<String, serde_json::Value> = RewardTerms::NAMES
+        .iter()
+        .zip(terms_sum)
+        .map(|(n, v)| (n.to_string(), json!(v)))
+        .collect();
+    let height = stats(&heights);
+    if args.json {
+        let terminated = match &termination {
+            None => json!(false),
+            Some(t) => json!(t.kind()),
+        };
+        let out = json!({
+            "policy": args.policy,
+            "terrain": spec.to_string(),
+            "seed": args.seed,
+            "start_xy_m": start,
+            "phases": phases,
+            "sim_seconds": task.world().time_secs(),
+            "distance_m": distance_m,
+            "lateral_drift_m": lateral_drift_m,
+            "final_yaw_deg": yaw.to_degrees(),
+            "terminated": terminated,
+            "termination_detail": termination.as_ref().map(ToString::to_string),
+            "goals_reached": task.goals_reached(),
+            "reward_total": reward_sum,
+            "reward_terms": reward_terms,
+            "base_height_m": { "mean": height["mean"], "std": height["std"], "min": min_h, "max": max_h },
+            "ik_clamped": ik_clamped,
+            "regions": regions,
+        });
+        out!("{out}");
+    } else {
+        out!(
+            "policy          {} on {spec} (seed {})",
+            args.policy,
+            args.seed
+        );
+        out!("start           x {:.2} m, y {:.2} m", start[0], start[1]);
+        out!(
+            "phases          {phases} ({:.1} s)",
+            task.world().time_secs()
+        );
+        out!(
+            "distance        {distance_m:.2} m forward, {lateral_drift_m:+.2} m sideways, yaw {:+.1} deg",
+            yaw.to_degrees()
+        );
+        out!("goals reached   {}", task.goals_reached());
+        let ended = termination
+            .as_ref()
+            .map_or("no (ran all phases)".to_string(), |t| format!("yes: {t}"));
+        out!("terminated      {ended}");
+        out!(
+            "base height     mean {:.3} m, std {:.3} m, min {min_h:.3} m, max {max_h:.3} m",
+            height["mean"].as_f64().unwrap_or(0.0),
+            height["std"].as_f64().unwrap_or(0.0)
+        );
+        out!("reward          {reward_sum:.3} total");
+        for (name, v) in RewardTerms::NAMES.iter().zip(terms_sum) {
+            out!("  {name:<12}  {v:.3}");
+        }
+        out!("regions         {}", regions.join(" -> "));
+        out!("IK clamps       {ik_clamped}");
+    }
+    Ok(())
+}

@@ -174,18 +174,44 @@ pub fn terrain_show(spec: &str, robot: Option<&Path>, seed: u64, as_json: bool) 
     Ok(())
 }
 
-/// Arguments of `quadwalk stand`.
+/// The scene flags every simulating command shares.
 #[derive(Debug, Args)]
-pub struct StandArgs {
+pub struct SceneArgs {
     /// Terrain spec, e.g. rigid, elastic:5cm, varying:2m:2,5cm [default: elastic:5cm]
     #[arg(long, conflicts_with = "config")]
     terrain: Option<String>,
-    /// Experiment file (TOML) whose [terrain] section gives the terrain
+    /// Experiment file (TOML) with [terrain] and optional [task] sections
     #[arg(long)]
     config: Option<PathBuf>,
     /// Robot description (URDF); default: the built-in Laikago
     #[arg(long)]
     robot: Option<PathBuf>,
+}
+
+impl SceneArgs {
+    /// The experiment these flags name: the config file, or the terrain
+    /// spec (default `elastic:5cm`) with the default task.
+    pub fn experiment(&self) -> Result<crate::config::Experiment> {
+        match (&self.config, &self.terrain) {
+            (Some(path), _) => crate::config::Experiment::from_file(path),
+            (None, terrain) => Ok(crate::config::Experiment {
+                terrain: parse_spec(terrain.as_deref().unwrap_or("elastic:5cm"))?,
+                task: robot::task::TaskConfig::default(),
+            }),
+        }
+    }
+
+    /// The robot these flags name.
+    pub fn robot(&self) -> Result<Arc<RobotModel>> {
+        load_robot(self.robot.as_deref())
+    }
+}
+
+/// Arguments of `quadwalk stand`.
+#[derive(Debug, Args)]
+pub struct StandArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Simulated seconds to stand
     #[arg(long, default_value = "10", value_parser = positive_seconds, allow_negative_numbers = true)]
     seconds: f64,
@@ -204,12 +230,8 @@ pub struct StandArgs {
 }
 
 pub fn stand(args: &StandArgs) -> Result<()> {
-    let spec = match (&args.config, &args.terrain) {
-        (Some(path), _) => crate::config::Experiment::from_file(path)?.terrain,
-        (None, Some(spec)) => parse_spec(spec)?,
-        (None, None) => parse_spec("elastic:5cm")?,
-    };
-    let model = load_robot(args.robot.as_deref())?;
+    let spec = args.scene.experiment()?.terrain;
+    let model = args.scene.robot()?;
     let mut world = make_world(&spec, model.clone(), args.seed, [args.x, args.y])?;
     let report = robot::stand(&mut world, args.seconds);
     if args.json {

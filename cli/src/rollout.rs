@@ -1,15 +1,13 @@
 //! `quadwalk rollout`: run a policy on a terrain for a number of phases and
 //! report distance, base height, termination and reward per term.
 
-use std::path::PathBuf;
-
 use anyhow::{Result, bail};
 use clap::Args;
 use robot::scripted::ScriptedCrawl;
-use robot::task::{RewardTerms, Task, TaskConfig};
+use robot::task::{RewardTerms, Task};
 use serde_json::json;
 
-use crate::commands::{load_robot, make_world, parse_spec};
+use crate::commands::{SceneArgs, make_world};
 
 /// Arguments of `quadwalk rollout`.
 #[derive(Debug, Args)]
@@ -17,15 +15,8 @@ pub struct RolloutArgs {
     /// Policy: `scripted` (the documented crawl)
     #[arg(long, default_value = "scripted")]
     policy: String,
-    /// Terrain spec [default: elastic:5cm]
-    #[arg(long, conflicts_with = "config")]
-    terrain: Option<String>,
-    /// Experiment file (TOML) with [terrain] and [task] sections
-    #[arg(long)]
-    config: Option<PathBuf>,
-    /// Robot description (URDF); default: the built-in Laikago
-    #[arg(long)]
-    robot: Option<PathBuf>,
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Phases to run (0.75 s each), unless the episode terminates first
     #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     phases: u32,
@@ -48,14 +39,8 @@ fn stats(values: &[f64]) -> serde_json::Value {
 }
 
 pub fn run(args: &RolloutArgs) -> Result<()> {
-    let (spec, mut task_config) = match (&args.config, &args.terrain) {
-        (Some(path), _) => {
-            let experiment = crate::config::Experiment::from_file(path)?;
-            (experiment.terrain, experiment.task)
-        }
-        (None, Some(spec)) => (parse_spec(spec)?, TaskConfig::default()),
-        (None, None) => (parse_spec("elastic:5cm")?, TaskConfig::default()),
-    };
+    let experiment = args.scene.experiment()?;
+    let (spec, mut task_config) = (experiment.terrain, experiment.task);
     let crawl = match args.policy.as_str() {
         "scripted" => ScriptedCrawl::default(),
         other => bail!(
@@ -63,7 +48,7 @@ pub fn run(args: &RolloutArgs) -> Result<()> {
         ),
     };
     task_config.max_phases = args.phases as usize;
-    let model = load_robot(args.robot.as_deref())?;
+    let model = args.scene.robot()?;
     let world = make_world(&spec, model, args.seed, [0.0, 0.0])?;
     let mut task = Task::new(world, task_config, args.seed);
     let mut obs = vec![0.0f32; task.observation_size()];

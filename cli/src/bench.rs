@@ -1,7 +1,7 @@
 //! `quadwalk bench`: physics steps per second of the robot standing, one
 //! world per thread, each thread stepping its own world.
 
-use std::sync::{Arc, Barrier};
+use std::sync::Barrier;
 use std::time::Instant;
 
 use anyhow::Result;
@@ -73,56 +73,64 @@ fn measure(spec: &str, threads: usize, seconds: f64, repeat: u32) -> Result<Meas
     })
 }
 
+/// Runs one world per thread: every thread `prepare`s its state (not
+/// timed), all wait until every thread is ready, then each runs `timed` and
+/// returns what it measured. A thread that fails to prepare still joins the
+/// start, so no other thread waits for it forever.
+fn on_each_thread<S, R: Send>(
+    threads: usize,
+    prepare: impl Fn(usize) -> Result<S> + Sync,
+    timed: impl Fn(S) -> R + Sync,
+) -> Result<Vec<R>> {
+    let start = Barrier::new(threads);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                let (start, prepare, timed) = (&start, &prepare, &timed);
+                scope.spawn(move || {
+                    let state = prepare(t);
+                    start.wait();
+                    state.map(timed)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .map_err(|_| anyhow::anyhow!("a bench thread panicked"))?
+            })
+            .collect()
+    })
+}
+
 fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement> {
     let spec = parse_spec(spec)?;
     let model = load_robot(None)?;
     let steps = (seconds / robot::DT_SECS).round().max(1.0) as u64;
     let settle_steps = 240;
-    let barrier = Arc::new(Barrier::new(threads + 1));
-    let tiles = make_world(&spec, model.clone(), 0, [0.0, 0.0])?
-        .terrain()
-        .tile_count();
-    let elapsed = std::thread::scope(|scope| -> Result<f64> {
-        let mut handles = Vec::new();
-        for _ in 0..threads {
-            let barrier = barrier.clone();
-            let model = model.clone();
-            let spec = &spec;
-            handles.push(scope.spawn(move || -> Result<()> {
-                let world = make_world(spec, model, 0, [0.0, 0.0]);
-                let mut world = match world {
-                    Ok(w) => w,
-                    Err(e) => {
-                        barrier.wait();
-                        barrier.wait();
-                        return Err(e);
-                    }
-                };
-                for _ in 0..settle_steps {
-                    world.step();
-                }
-                barrier.wait();
-                for _ in 0..steps {
-                    world.step();
-                }
-                barrier.wait();
-                Ok(())
-            }));
-        }
-        barrier.wait();
-        let start = Instant::now();
-        barrier.wait();
-        let elapsed = start.elapsed().as_secs_f64();
-        for handle in handles {
-            handle
-                .join()
-                .map_err(|_| anyhow::anyhow!("a bench thread panicked"))??;
-        }
-        Ok(elapsed)
-    })?;
+    let runs = on_each_thread(
+        threads,
+        |_| {
+            let mut world = make_world(&spec, model.clone(), 0, [0.0, 0.0])?;
+            for _ in 0..settle_steps {
+                world.step();
+            }
+            Ok(world)
+        },
+        |mut world| {
+            let start = Instant::now();
+            for _ in 0..steps {
+                world.step();
+            }
+            (start.elapsed().as_secs_f64(), world.terrain().tile_count())
+        },
+    )?;
+    // Worlds start together; the rate counts until the slowest finishes.
+    let elapsed = runs.iter().map(|r| r.0).fold(0.0, f64::max);
     Ok(Measurement {
         terrain: spec.to_string(),
-        tiles,
+        tiles: runs[0].1,
         threads,
         steps_per_s: (steps * threads as u64) as f64 / elapsed,
         runs_steps_per_s: Vec::new(),
@@ -135,55 +143,36 @@ fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement>
 fn measure_phases(spec: &str, threads: usize, phases: u32) -> Result<f64> {
     let spec = parse_spec(spec)?;
     let model = load_robot(None)?;
-    let barrier = Arc::new(Barrier::new(threads + 1));
-    let elapsed = std::thread::scope(|scope| -> Result<f64> {
-        let mut handles = Vec::new();
-        for t in 0..threads {
-            let barrier = barrier.clone();
-            let model = model.clone();
-            let spec = &spec;
-            handles.push(scope.spawn(move || -> Result<f64> {
-                let world = make_world(spec, model, t as u64, [0.0, 0.0]);
-                let world = match world {
-                    Ok(w) => w,
-                    Err(e) => {
-                        barrier.wait();
-                        return Err(e);
-                    }
-                };
-                let mut task = Task::new(world, TaskConfig::default(), t as u64);
-                let crawl = ScriptedCrawl::default();
-                let mut obs = vec![0.0f32; task.observation_size()];
-                task.reset(&mut obs);
-                barrier.wait();
-                // Only whole phases (180 steps) count; a phase cut short by a
-                // termination is neither timed nor counted.
-                let (mut timed, mut whole) = (0.0, 0u32);
-                while whole < phases {
-                    if task.done() {
-                        task.reset(&mut obs);
-                    }
-                    let start = Instant::now();
-                    let outcome = task.step_phase(&crawl.action(task.phase()), &mut obs);
-                    if outcome.steps == robot::action::SAMPLES_PER_PHASE {
-                        timed += start.elapsed().as_secs_f64();
-                        whole += 1;
-                    }
+    let timed = on_each_thread(
+        threads,
+        |t| {
+            let world = make_world(&spec, model.clone(), t as u64, [0.0, 0.0])?;
+            let mut task = Task::new(world, TaskConfig::default(), t as u64);
+            let mut obs = vec![0.0f32; task.observation_size()];
+            task.reset(&mut obs);
+            Ok((task, obs))
+        },
+        |(mut task, mut obs)| {
+            let crawl = ScriptedCrawl::default();
+            // Only whole phases (180 steps) count; a phase cut short by a
+            // termination is neither timed nor counted.
+            let (mut timed, mut whole) = (0.0, 0u32);
+            while whole < phases {
+                if task.done() {
+                    task.reset(&mut obs);
                 }
-                Ok(timed)
-            }));
-        }
-        barrier.wait();
-        let mut slowest: f64 = 0.0;
-        for handle in handles {
-            let timed = handle
-                .join()
-                .map_err(|_| anyhow::anyhow!("a bench thread panicked"))??;
-            slowest = slowest.max(timed);
-        }
-        Ok(slowest)
-    })?;
-    Ok((phases as usize * threads) as f64 / elapsed)
+                let start = Instant::now();
+                let outcome = task.step_phase(&crawl.action(task.phase()), &mut obs);
+                if outcome.steps == robot::action::SAMPLES_PER_PHASE {
+                    timed += start.elapsed().as_secs_f64();
+                    whole += 1;
+                }
+            }
+            timed
+        },
+    )?;
+    let slowest = timed.into_iter().fold(0.0, f64::max);
+    Ok((phases as usize * threads) as f64 / slowest)
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {

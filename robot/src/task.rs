@@ -123,17 +123,7 @@ impl ObservationConfig {
 
     /// Number of observation values with these switches.
     pub fn size(&self) -> usize {
-        let mut n = 4 + 3 + 6 + 1 + 12 + 1 + 2 + 1;
-        if self.foot_history {
-            n += 36;
-        }
-        if self.short_history {
-            n += 24;
-        }
-        if self.foot_velocity {
-            n += 12;
-        }
-        n
+        self.blocks().last().map_or(0, |(_, range)| range.end)
     }
 }
 
@@ -523,8 +513,7 @@ impl Task {
                 .map(|t| t * t)
                 .sum::<f64>()
                 .sqrt();
-            let hip_heights = self.hip_heights_m();
-            let height = hip_heights.iter().sum::<f64>() / 4.0;
+            let height = self.base_height_m();
             height_sum += height;
             height_range = (height_range.0.min(height), height_range.1.max(height));
             termination = self.check_termination(height);
@@ -542,7 +531,7 @@ impl Task {
         self.episode.phase += 1;
 
         let mean_base_height_m = height_sum / steps as f64;
-        let (reward, terms, goals_reached) = if let Some(_reason) = &termination {
+        let (reward, terms, goals_reached) = if termination.is_some() {
             (self.config.termination_reward, RewardTerms::default(), 0)
         } else {
             let rho = self.goal_in_base();
@@ -550,7 +539,7 @@ impl Task {
             let terms = RewardTerms {
                 distance: RewardTerms::distance_term(goal_distance_prev, rho.norm()),
                 orientation: RewardTerms::orientation_term(rho.y.atan2(rho.x)),
-                height: RewardTerms::height_term(self.hip_heights_m().iter().sum::<f64>() / 4.0),
+                height: RewardTerms::height_term(self.base_height_m()),
                 torque: RewardTerms::torque_term(torque_norm_sum / steps as f64),
                 roll: RewardTerms::roll_term(roll),
             };
@@ -618,6 +607,11 @@ impl Task {
         self.world
             .feet_in_world_m()
             .map(|f| (inv * nalgebra::Point3::from(f)).coords)
+    }
+
+    /// The base height the reward and termination use: the mean of h_b, m.
+    pub fn base_height_m(&self) -> f64 {
+        self.hip_heights_m().iter().sum::<f64>() / 4.0
     }
 
     /// h_b: height of each hip (abduction) joint above the terrain right below it.

@@ -17,6 +17,7 @@ mod bench;
 mod commands;
 mod config;
 mod rollout;
+mod viz_args;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -40,6 +41,8 @@ enum Command {
     Stand(commands::StandArgs),
     /// Run a policy (the scripted crawl) for a number of phases and report distance, height, reward.
     Rollout(rollout::RolloutArgs),
+    /// Run a policy and watch it in the Rerun viewer (rollout with --rerun spawn by default).
+    Play(rollout::PlayArgs),
     /// Measure physics steps per second of the robot standing, one world per thread.
     Bench(bench::BenchArgs),
 }
@@ -75,7 +78,8 @@ fn main() -> ExitCode {
             json,
         }) => commands::terrain_show(&spec, robot.as_deref(), seed, json),
         Command::Stand(args) => commands::stand(&args),
-        Command::Rollout(args) => rollout::run(&args),
+        Command::Rollout(args) => rollout::rollout(&args),
+        Command::Play(args) => rollout::play(&args),
         Command::Bench(args) => bench::run(&args),
     };
     match result {

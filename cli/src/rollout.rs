@@ -1,13 +1,19 @@
-//! `quadwalk rollout`: run a policy on a terrain for a number of phases and
-//! report distance, base height, termination and reward per term.
+//! `quadwalk rollout` and `quadwalk play`: run a policy on a terrain for a
+//! number of phases (or until the episode terminates), stream it to Rerun,
+//! and report distance, base height, termination and reward per term.
+//! `play` is `rollout` with the viewer on by default.
+
+use std::path::Path;
 
 use anyhow::{Result, bail};
 use clap::Args;
 use robot::scripted::ScriptedCrawl;
 use robot::task::{RewardTerms, Task};
 use serde_json::json;
+use viz::RerunSink;
 
 use crate::commands::{SceneArgs, make_world};
+use crate::viz_args::{RerunArgs, print_warnings};
 
 /// Arguments of `quadwalk rollout`.
 #[derive(Debug, Args)]
@@ -26,6 +32,70 @@ pub struct RolloutArgs {
     /// Print one JSON object instead of text
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    rerun: RerunArgs,
+}
+
+/// Arguments of `quadwalk play`.
+#[derive(Debug, Args)]
+pub struct PlayArgs {
+    /// Policy: `scripted` (the documented crawl)
+    #[arg(long, default_value = "scripted")]
+    policy: String,
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Phases to run (0.75 s each), unless the episode terminates first
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    phases: u32,
+    /// Seed: start position and the varying terrain's draw
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Print one JSON object instead of text
+    #[arg(long)]
+    json: bool,
+    /// Rerun stream (default for play: spawn)
+    #[command(flatten)]
+    rerun: RerunArgs,
+}
+
+/// What `rollout` and `play` share.
+struct Run<'a> {
+    command: &'static str,
+    policy: &'a str,
+    scene: &'a SceneArgs,
+    phases: u32,
+    seed: u64,
+    json: bool,
+    rerun: &'a RerunArgs,
+    default_sink: RerunSink,
+}
+
+/// `quadwalk rollout`.
+pub fn rollout(args: &RolloutArgs) -> Result<()> {
+    run(&Run {
+        command: "rollout",
+        policy: &args.policy,
+        scene: &args.scene,
+        phases: args.phases,
+        seed: args.seed,
+        json: args.json,
+        rerun: &args.rerun,
+        default_sink: RerunSink::Off,
+    })
+}
+
+/// `quadwalk play`.
+pub fn play(args: &PlayArgs) -> Result<()> {
+    run(&Run {
+        command: "play",
+        policy: &args.policy,
+        scene: &args.scene,
+        phases: args.phases,
+        seed: args.seed,
+        json: args.json,
+        rerun: &args.rerun,
+        default_sink: RerunSink::Spawn,
+    })
 }
 
 /// Summary statistics of a series.
@@ -38,10 +108,10 @@ fn stats(values: &[f64]) -> serde_json::Value {
     json!({ "mean": mean, "std": std, "min": min, "max": max })
 }
 
-pub fn run(args: &RolloutArgs) -> Result<()> {
+fn run(args: &Run) -> Result<()> {
     let experiment = args.scene.experiment()?;
     let (spec, mut task_config) = (experiment.terrain, experiment.task);
-    let crawl = match args.policy.as_str() {
+    let crawl = match args.policy {
         "scripted" => ScriptedCrawl::default(),
         other => bail!(
             "policy {other:?} is not known (known: scripted; trained checkpoints arrive with `quadwalk train`)"
@@ -51,9 +121,20 @@ pub fn run(args: &RolloutArgs) -> Result<()> {
     let model = args.scene.robot()?;
     let world = make_world(&spec, model, args.seed, [0.0, 0.0])?;
     let mut task = Task::new(world, task_config, args.seed);
+    let mut logger = args.rerun.open(
+        args.default_sink.clone(),
+        task.world().model(),
+        Path::new(&format!("quadwalk-{}.rrd", args.command)),
+        &format!(
+            "{} {} on {spec} (seed {})",
+            args.command, args.policy, args.seed
+        ),
+    )?;
     let mut obs = vec![0.0f32; task.observation_size()];
     task.reset(&mut obs);
     let start = task.start_xy_m();
+    logger.log_terrain(task.world().terrain());
+    logger.log_now(&task);
 
     let mut terms_sum = [0.0f64; 5];
     let mut reward_sum = 0.0;
@@ -65,7 +146,8 @@ pub fn run(args: &RolloutArgs) -> Result<()> {
     let mut phases = 0;
     while !task.done() {
         let action = crawl.action(task.phase());
-        let outcome = task.step_phase(&action, &mut obs);
+        let outcome = task.step_phase_observed(&action, &mut obs, &mut logger);
+        print_warnings(&mut logger);
         phases += 1;
         reward_sum += outcome.reward;
         for (sum, v) in terms_sum.iter_mut().zip(outcome.terms.values()) {
@@ -83,6 +165,8 @@ pub fn run(args: &RolloutArgs) -> Result<()> {
         }
         termination = outcome.termination;
     }
+    logger.finish();
+    print_warnings(&mut logger);
     let base = task.world().base_pose().translation.vector;
     let distance_m = base.x - start[0];
     let lateral_drift_m = base.y - start[1];
@@ -116,6 +200,7 @@ pub fn run(args: &RolloutArgs) -> Result<()> {
             "base_height_m": { "mean": height["mean"], "std": height["std"], "min": min_h, "max": max_h },
             "ik_clamped": ik_clamped,
             "regions": regions,
+            "rerun_frames": logger.frames_logged(),
         });
         out!("{out}");
     } else {
@@ -149,6 +234,9 @@ pub fn run(args: &RolloutArgs) -> Result<()> {
         }
         out!("regions         {}", regions.join(" -> "));
         out!("IK clamps       {ik_clamped}");
+        if logger.frames_logged() > 0 {
+            out!("rerun frames    {}", logger.frames_logged());
+        }
     }
     Ok(())
 }

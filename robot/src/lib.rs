@@ -7,6 +7,7 @@ pub mod mesh;
 pub mod model;
 pub mod scripted;
 pub mod seam;
+pub mod snapshot;
 pub mod stand;
 pub mod task;
 pub mod world;

@@ -59,6 +59,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::action::{ACTION_SIZE, SAMPLES_PER_PHASE, curves_from_action};
 use crate::model::LegName;
+use crate::snapshot::{NoObserver, PhaseObserver, PhaseStart, StepSnapshot};
 use crate::world::{DT_SECS, World};
 
 /// Swing order of the four phases of a cycle.
@@ -454,6 +455,17 @@ impl Task {
     /// Runs one phase with `action` (27 values, clipped to [-1, 1]) and
     /// writes the next observation into `obs`.
     pub fn step_phase(&mut self, action: &[f32], obs: &mut [f32]) -> PhaseOutcome {
+        self.step_phase_observed(action, obs, &mut NoObserver)
+    }
+
+    /// [`Self::step_phase`], telling `observer` about the phase's curves,
+    /// every physics step and the outcome (for loggers and viewers).
+    pub fn step_phase_observed(
+        &mut self,
+        action: &[f32],
+        obs: &mut [f32],
+        observer: &mut dyn PhaseObserver,
+    ) -> PhaseOutcome {
         assert_eq!(
             action.len(),
             ACTION_SIZE,
@@ -472,6 +484,16 @@ impl Task {
             hind,
         );
         let goal_distance_prev = self.goal_in_base().norm();
+        observer.phase_started(
+            self,
+            &PhaseStart {
+                phase: self.episode.phase,
+                sim_time_s: self.world.time_secs(),
+                swing_leg: swing,
+                base_start,
+                curves,
+            },
+        );
 
         let model_legs = self.world.model().legs.clone();
         let mut targets = self.world.joint_targets_rad().to_vec();
@@ -517,6 +539,7 @@ impl Task {
             height_sum += height;
             height_range = (height_range.0.min(height), height_range.1.max(height));
             termination = self.check_termination(height);
+            observer.stepped(self, i);
             if termination.is_some() {
                 break;
             }
@@ -549,7 +572,7 @@ impl Task {
         let truncated = termination.is_none() && self.episode.phase >= self.config.max_phases;
         self.episode.done = termination.is_some() || truncated;
         self.observe(obs);
-        PhaseOutcome {
+        let outcome = PhaseOutcome {
             reward,
             terms,
             termination,
@@ -563,6 +586,37 @@ impl Task {
                 let base = self.world.base_pose().translation.vector;
                 self.world.terrain().region_index_at(base.x, base.y)
             },
+        };
+        observer.phase_ended(self, &outcome);
+        outcome
+    }
+
+    /// The state now, for loggers and viewers; `tiles_half_side_m` sets the
+    /// square around the base whose tiles are included (0: none).
+    pub fn snapshot(&self, tiles_half_side_m: f64) -> StepSnapshot {
+        let base = self.world.base_pose();
+        let (roll, pitch, yaw) = base.rotation.euler_angles();
+        let mut tiles = Vec::new();
+        if tiles_half_side_m > 0.0 {
+            let centre = [base.translation.x, base.translation.y];
+            self.world.terrain().tiles_in(
+                self.world.physics(),
+                terrain_plugins::Rect::around(centre, tiles_half_side_m),
+                &mut tiles,
+            );
+        }
+        // During a phase `episode.phase` is the running phase; between
+        // phases it is the next one.
+        StepSnapshot {
+            sim_time_s: self.world.time_secs(),
+            phase: self.episode.phase,
+            body_poses: self.world.body_poses(),
+            base_rpy_rad: [roll, pitch, yaw],
+            base_height_m: self.base_height_m(),
+            joint_torques_n_m: self.world.applied_torques_n_m().to_vec(),
+            contact_points_m: self.world.ground_contact_points_m(),
+            tiles,
+            goal_xy_m: self.episode.goal_xy_m,
         }
     }
 

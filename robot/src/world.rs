@@ -360,6 +360,37 @@ impl World {
         self.contacts(false).non_foot_links
     }
 
+    /// Where the robot touches the ground now, world frame, m: one point
+    /// (midway between the two surfaces) per robot collider and terrain
+    /// collider within [`TOUCH_DISTANCE_M`] of each other, with the leg
+    /// whose foot it is (`None` for other links). Same exact test as
+    /// [`Self::ground_contacts`].
+    pub fn ground_contact_points_m(&self) -> Vec<(Vector3<f64>, Option<usize>)> {
+        let mut points = Vec::new();
+        for (handle, _, foot_leg) in &self.robot.colliders {
+            let collider = &self.physics.colliders[*handle];
+            for pair in self.physics.contact_pairs_with(*handle) {
+                let other = if pair.collider1 == *handle {
+                    pair.collider2
+                } else {
+                    pair.collider1
+                };
+                let other = &self.physics.colliders[other];
+                if let Ok(Some(contact)) = terrain_plugins::rapier3d::parry::query::contact(
+                    collider.position(),
+                    collider.shape(),
+                    other.position(),
+                    other.shape(),
+                    TOUCH_DISTANCE_M as f32,
+                ) {
+                    let mid = (contact.point1 + contact.point2) * 0.5;
+                    points.push((from_vector(mid), *foot_leg));
+                }
+            }
+        }
+        points
+    }
+
     fn contacts(&self, with_feet: bool) -> GroundContacts {
         let mut contacts = GroundContacts::default();
         for (handle, link, foot_leg) in &self.robot.colliders {

@@ -6,6 +6,8 @@ use std::process::{Command, Output};
 
 use serde_json::Value;
 
+mod rerun_stream;
+
 fn quadwalk(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_quadwalk"))
         .args(args)

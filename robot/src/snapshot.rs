@@ -1,0 +1,117 @@
+//! Plain snapshots of a running task for viewers and loggers, and the hook
+//! through which a phase reports its progress.
+//!
+//! Nothing here knows about any viewer: a logger (the `viz` crate streams to
+//! Rerun) implements [`PhaseObserver`], is handed to
+//! [`crate::task::Task::step_phase_observed`], and builds a
+//! [`StepSnapshot`] with [`crate::task::Task::snapshot`] whenever it wants
+//! one. Every position is in the world frame, in metres; angles in radians.
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use terrain_plugins::TileState;
+
+use crate::action::PhaseCurves;
+use crate::model::LegName;
+use crate::task::{PhaseOutcome, Task};
+
+/// The state of the robot, its surroundings and its controller at one
+/// physics step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepSnapshot {
+    /// simulated time since the world was made, s
+    pub sim_time_s: f64,
+    /// index of the phase this step belongs to (phases run before it in this
+    /// episode)
+    pub phase: usize,
+    /// every model body's pose (model body order; body 0 is the base)
+    pub body_poses: Vec<Isometry3<f64>>,
+    /// base roll, pitch, yaw (nalgebra's Euler angles), rad
+    pub base_rpy_rad: [f64; 3],
+    /// mean hip height above the ground below each hip (h_b), m
+    pub base_height_m: f64,
+    /// PD torque of every actuated joint (joint order), N m
+    pub joint_torques_n_m: Vec<f64>,
+    /// where the robot touches the ground, with the leg whose foot it is
+    pub contact_points_m: Vec<(Vector3<f64>, Option<usize>)>,
+    /// tiles whose centre lies in the square around the base that the caller
+    /// asked for (empty on terrains without tiles)
+    pub tiles: Vec<TileState>,
+    /// the current goal, x and y, m
+    pub goal_xy_m: [f64; 2],
+}
+
+/// What a phase is about to do: its three curves and where they are.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhaseStart {
+    /// index of the phase in its episode
+    pub phase: usize,
+    /// simulated time at the phase start, s
+    pub sim_time_s: f64,
+    /// the leg that swings
+    pub swing_leg: LegName,
+    /// the base pose at the phase start: the frame of the curves
+    pub base_start: Isometry3<f64>,
+    /// the phase's curves (base frame at the phase start)
+    pub curves: PhaseCurves,
+}
+
+impl PhaseStart {
+    /// The base position curve sampled at `samples` + 1 evenly spaced
+    /// parameters, world frame, m.
+    pub fn base_curve_m(&self, samples: usize) -> Vec<Vector3<f64>> {
+        sample(samples)
+            .map(|t| (self.base_start * Point3::from(self.curves.base_position.at(t))).coords)
+            .collect()
+    }
+
+    /// The base target pose (position and orientation curves together) at
+    /// `samples` + 1 evenly spaced parameters, world frame.
+    pub fn base_targets(&self, samples: usize) -> Vec<Isometry3<f64>> {
+        sample(samples)
+            .map(|t| {
+                let rpy = self.curves.base_orientation.at(t);
+                self.base_start
+                    * Isometry3::from_parts(
+                        Translation3::from(self.curves.base_position.at(t)),
+                        UnitQuaternion::from_euler_angles(rpy.x, rpy.y, rpy.z),
+                    )
+            })
+            .collect()
+    }
+
+    /// The swing foot curve sampled at `samples` + 1 evenly spaced
+    /// parameters, world frame, m.
+    pub fn swing_foot_curve_m(&self, samples: usize) -> Vec<Vector3<f64>> {
+        sample(samples)
+            .map(|t| (self.base_start * Point3::from(self.curves.swing_foot.at(t))).coords)
+            .collect()
+    }
+
+    /// Where the swing foot is sent to land (its last control point), world
+    /// frame, m.
+    pub fn landing_m(&self) -> Vector3<f64> {
+        (self.base_start * Point3::from(self.curves.swing_foot.points[3])).coords
+    }
+}
+
+fn sample(samples: usize) -> impl Iterator<Item = f64> {
+    let n = samples.max(1);
+    (0..=n).map(move |i| i as f64 / n as f64)
+}
+
+/// Told what a phase does as it runs. Every method has an empty default.
+pub trait PhaseObserver {
+    /// Before the first physics step of a phase.
+    fn phase_started(&mut self, _task: &Task, _start: &PhaseStart) {}
+    /// After physics step `step_in_phase` (1-based) of the running phase.
+    fn stepped(&mut self, _task: &Task, _step_in_phase: usize) {}
+    /// After the phase ended (all its steps, or the step that terminated
+    /// it); `task.phase()` already counts it.
+    fn phase_ended(&mut self, _task: &Task, _outcome: &PhaseOutcome) {}
+}
+
+/// An observer that does nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoObserver;
+
+impl PhaseObserver for NoObserver {}

@@ -1,0 +1,382 @@
+//! Rerun streaming, checked with Rerun's own tooling: the `rerun` command
+//! and the Python reader of `rerun-sdk==0.36.3`, which the test set-up
+//! installs into `target/rerun-venv` (once; pip needs PyPI the first time).
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::{Mutex, OnceLock};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+use super::{json_of, quadwalk};
+
+const RERUN_SDK: &str = "rerun-sdk==0.36.3";
+
+/// The virtual environment with rerun-sdk, made on first use.
+fn rerun_venv() -> &'static Path {
+    static VENV: OnceLock<PathBuf> = OnceLock::new();
+    static LOCK: Mutex<()> = Mutex::new(());
+    VENV.get_or_init(|| {
+        let _guard = LOCK.lock().unwrap();
+        let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/rerun-venv");
+        let python = venv.join("bin/python");
+        let ready = venv.join(".rerun-sdk-0.36.3");
+        if !ready.exists() {
+            let status = Command::new("python3")
+                .args(["-m", "venv"])
+                .arg(&venv)
+                .status()
+                .expect("python3 runs (the Rerun tests need Python 3 with venv)");
+            assert!(
+                status.success(),
+                "python3 -m venv {} failed",
+                venv.display()
+            );
+            let status = Command::new(&python)
+                .args(["-m", "pip", "install", "--quiet", RERUN_SDK])
+                .status()
+                .expect("pip runs");
+            assert!(status.success(), "pip install {RERUN_SDK} failed");
+            std::fs::write(&ready, RERUN_SDK).unwrap();
+        }
+        venv
+    })
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rerun");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    let _ = std::fs::remove_file(&path);
+    path
+}
+
+/// What the Python reader finds in an `.rrd`: see `read_rrd.py`.
+fn read_rrd(path: &Path) -> Value {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/cli/read_rrd.py");
+    let out = Command::new(rerun_venv().join("bin/python"))
+        .arg(&script)
+        .arg(path)
+        .output()
+        .expect("python runs");
+    assert!(
+        out.status.success(),
+        "read_rrd.py {} failed: {}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("read_rrd.py prints JSON")
+}
+
+/// The simulation's own values for the rollout the test records: base
+/// position and tile sinks at every logged frame.
+fn simulated_frames(spec: &str, seed: u64, phases: usize, rate: viz::LogRate) -> Vec<Frame> {
+    use robot::snapshot::PhaseObserver;
+    use robot::task::{Task, TaskConfig};
+
+    struct Recorder {
+        rate: viz::LogRate,
+        frames: Vec<Frame>,
+        last: Option<(usize, usize)>,
+    }
+    impl Recorder {
+        fn record(&mut self, task: &Task) {
+            let snap = task.snapshot(viz::VizSettings::default().tiles_half_side_m);
+            self.frames.push(Frame {
+                sim_time_s: snap.sim_time_s,
+                base_m: snap.body_poses[0].translation.vector.into(),
+                sinks_m: snap.tiles.iter().map(|t| t.sink_m).collect(),
+            });
+        }
+    }
+    impl PhaseObserver for Recorder {
+        fn stepped(&mut self, task: &Task, step: usize) {
+            if self.rate.logs_step(step, robot::action::SAMPLES_PER_PHASE) {
+                self.record(task);
+                self.last = Some((task.phase(), step));
+            }
+        }
+        fn phase_ended(&mut self, task: &Task, outcome: &robot::task::PhaseOutcome) {
+            if self.last != Some((task.phase() - 1, outcome.steps)) {
+                self.record(task);
+            }
+        }
+    }
+
+    let registry = terrain_plugins::Registry::builtin();
+    let model = std::sync::Arc::new(robot::RobotModel::laikago());
+    let ctx = terrain_plugins::BuildContext {
+        supported_mass_kg: model.total_mass_kg(),
+        seed,
+        ..Default::default()
+    };
+    let terrain = registry.create(spec, &ctx).unwrap();
+    let world =
+        robot::World::new(model, terrain, robot::WorldConfig::default(), [0.0, 0.0]).unwrap();
+    let config = TaskConfig {
+        max_phases: phases,
+        ..TaskConfig::default()
+    };
+    let mut task = Task::new(world, config, seed);
+    let mut obs = vec![0.0f32; task.observation_size()];
+    task.reset(&mut obs);
+    let mut recorder = Recorder {
+        rate,
+        frames: Vec::new(),
+        last: None,
+    };
+    recorder.record(&task);
+    let crawl = robot::scripted::ScriptedCrawl::default();
+    while !task.done() {
+        let action = crawl.action(task.phase());
+        task.step_phase_observed(&action, &mut obs, &mut recorder);
+    }
+    recorder.frames
+}
+
+#[derive(Debug)]
+struct Frame {
+    sim_time_s: f64,
+    base_m: [f64; 3],
+    sinks_m: Vec<f64>,
+}
+
+#[test]
+fn a_saved_rollout_holds_the_simulations_values() {
+    let rrd = scratch("rollout.rrd");
+    let (spec, seed, phases) = ("elastic:5cm", 3, 3usize);
+    let summary = json_of(&[
+        "rollout",
+        "--terrain",
+        spec,
+        "--seed",
+        &seed.to_string(),
+        "--phases",
+        &phases.to_string(),
+        "--rerun",
+        &format!("save:{}", rrd.display()),
+        "--rerun-rate",
+        "45",
+        "--json",
+    ]);
+    let rate: viz::LogRate = "45".parse().unwrap();
+    let expected = simulated_frames(spec, seed, phases, rate);
+    let ran = summary["phases"].as_u64().unwrap() as usize;
+    assert_eq!(ran, phases, "the short rollout runs all its phases");
+    // One frame after the reset, then 180 / 45 = 4 per phase.
+    assert_eq!(expected.len(), 1 + phases * 4);
+    assert_eq!(
+        summary["rerun_frames"].as_u64(),
+        Some(expected.len() as u64)
+    );
+
+    let content = read_rrd(&rrd);
+    let entities: Vec<&str> = content["entities"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e.as_str().unwrap())
+        .collect();
+    for path in [
+        "/world/robot/chassis",
+        "/world/robot/chassis/shape_0",
+        "/world/base/trajectory",
+        "/world/goal",
+        "/world/targets/base",
+        "/world/targets/orientation",
+        "/world/targets/swing_foot",
+        "/world/targets/landing",
+        "/world/terrain/tiles",
+        "/world/terrain/regions",
+        "/world/contacts",
+        "/reward/distance",
+        "/reward/total",
+        "/base/height_m",
+        "/base/pitch_deg",
+        "/torque/FR_hip_motor_2_chassis_joint",
+    ] {
+        assert!(entities.contains(&path), "{path} missing from {entities:?}");
+    }
+    for timeline in ["sim_time", "phase"] {
+        assert!(
+            content["timelines"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|t| t == timeline),
+            "timeline {timeline} missing"
+        );
+    }
+    let base = content["base_positions"].as_array().unwrap();
+    let tiles = content["tile_sinks"].as_array().unwrap();
+    assert_eq!(base.len(), expected.len(), "logged frames");
+    assert_eq!(tiles.len(), expected.len(), "logged tile frames");
+    assert_eq!(
+        content["phase_starts"].as_u64(),
+        Some(phases as u64),
+        "one set of curves per phase"
+    );
+    for (i, frame) in expected.iter().enumerate() {
+        let t = base[i]["sim_time_s"].as_f64().unwrap();
+        assert!(
+            (t - frame.sim_time_s).abs() < 1e-6,
+            "frame {i}: time {t} vs {}",
+            frame.sim_time_s
+        );
+        let p: Vec<f64> = base[i]["xyz"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        for k in 0..3 {
+            // Logged as f32.
+            assert!(
+                (p[k] - frame.base_m[k]).abs() < 1e-5,
+                "frame {i}: base {p:?} vs {:?}",
+                frame.base_m
+            );
+        }
+        let sinks: Vec<f64> = tiles[i]["sinks_m"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(sinks.len(), frame.sinks_m.len(), "frame {i}: tile count");
+        assert!(!sinks.is_empty(), "tiles near the robot are logged");
+        for (a, b) in sinks.iter().zip(&frame.sinks_m) {
+            assert!((a - b).abs() < 1e-5, "frame {i}: sink {a} vs {b}");
+        }
+    }
+    // The robot stands on the tiles: some of them are pushed down.
+    let deepest = expected
+        .last()
+        .unwrap()
+        .sinks_m
+        .iter()
+        .cloned()
+        .fold(0.0, f64::max);
+    assert!(deepest > 0.02, "deepest logged sink {deepest} m");
+
+    // Rerun's own verifier accepts the file.
+    let verify = Command::new(rerun_venv().join("bin/rerun"))
+        .args(["rrd", "verify"])
+        .arg(&rrd)
+        .output()
+        .unwrap();
+    assert!(
+        verify.status.success(),
+        "rerun rrd verify: {}",
+        String::from_utf8_lossy(&verify.stderr)
+    );
+}
+
+/// A `rerun` server started on a free port on 127.0.0.1 that saves what it
+/// receives.
+struct Receiver {
+    child: Child,
+    port: u16,
+}
+
+impl Receiver {
+    fn start(save: &Path) -> Self {
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let child = Command::new(rerun_binary())
+            .args(["--bind", "127.0.0.1", "--port", &port.to_string(), "--save"])
+            .arg(save)
+            .env("RERUN_ANALYTICS", "0")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("rerun starts");
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+            assert!(Instant::now() < deadline, "rerun did not listen on {port}");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        Self { child, port }
+    }
+}
+
+impl Receiver {
+    /// Ends the server.
+    fn stop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The `rerun` executable itself: `bin/rerun` from pip is a Python launcher
+/// that starts it as a child, which killing the launcher would leave behind.
+fn rerun_binary() -> PathBuf {
+    let lib = rerun_venv().join("lib");
+    std::fs::read_dir(&lib)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path().join("site-packages/rerun_sdk/rerun_cli/rerun"))
+        .find(|p| p.exists())
+        .unwrap_or_else(|| panic!("no rerun_cli/rerun under {}", lib.display()))
+}
+
+impl Drop for Receiver {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+#[test]
+fn a_live_stream_reaches_a_receiver_and_a_missing_one_is_a_warning() {
+    let saved = scratch("received.rrd");
+    let mut receiver = Receiver::start(&saved);
+    let url = format!("connect:rerun+http://127.0.0.1:{}/proxy", receiver.port);
+    let out = quadwalk(&[
+        "rollout",
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--rerun",
+        &url,
+        "--json",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["rerun_frames"].as_u64(), Some(3), "{stderr}");
+    // The server writes as it receives; wait for the frames to land.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let content = loop {
+        std::thread::sleep(Duration::from_millis(500));
+        if saved.exists() {
+            // Stop the server so that the file is complete.
+            receiver.stop();
+            break read_rrd(&saved);
+        }
+        assert!(Instant::now() < deadline, "the receiver saved nothing");
+    };
+    assert_eq!(
+        content["base_positions"].as_array().unwrap().len(),
+        3,
+        "frames received: {content}"
+    );
+
+    // Nobody listens on the port any more: a warning, and the run goes on.
+    let out = quadwalk(&[
+        "rollout",
+        "--terrain",
+        "rigid",
+        "--phases",
+        "1",
+        "--rerun",
+        &url,
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("warning: no Rerun viewer at"), "{stderr}");
+}

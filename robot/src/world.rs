@@ -369,13 +369,7 @@ impl World {
         let mut points = Vec::new();
         for (handle, _, foot_leg) in &self.robot.colliders {
             let collider = &self.physics.colliders[*handle];
-            for pair in self.physics.contact_pairs_with(*handle) {
-                let other = if pair.collider1 == *handle {
-                    pair.collider2
-                } else {
-                    pair.collider1
-                };
-                let other = &self.physics.colliders[other];
+            for other in self.paired_colliders(*handle) {
                 if let Ok(Some(contact)) = terrain_plugins::rapier3d::parry::query::contact(
                     collider.position(),
                     collider.shape(),
@@ -391,6 +385,18 @@ impl World {
         points
     }
 
+    /// The colliders the narrow phase pairs with `handle`.
+    fn paired_colliders(&self, handle: ColliderHandle) -> impl Iterator<Item = &Collider> + '_ {
+        self.physics.contact_pairs_with(handle).map(move |pair| {
+            let other = if pair.collider1 == handle {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            &self.physics.colliders[other]
+        })
+    }
+
     fn contacts(&self, with_feet: bool) -> GroundContacts {
         let mut contacts = GroundContacts::default();
         for (handle, link, foot_leg) in &self.robot.colliders {
@@ -402,13 +408,7 @@ impl World {
                 continue;
             }
             let collider = &self.physics.colliders[*handle];
-            let touching = self.physics.contact_pairs_with(*handle).any(|pair| {
-                let other = if pair.collider1 == *handle {
-                    pair.collider2
-                } else {
-                    pair.collider1
-                };
-                let other = &self.physics.colliders[other];
+            let touching = self.paired_colliders(*handle).any(|other| {
                 terrain_plugins::rapier3d::parry::query::distance(
                     collider.position(),
                     collider.shape(),

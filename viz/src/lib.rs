@@ -283,8 +283,7 @@ impl RolloutLogger {
     /// Logs one frame of the task as it is now (the state after a reset,
     /// say). Observed phases log their own frames.
     pub fn log_now(&mut self, task: &Task) {
-        let step = 0;
-        self.log_frame(task, step);
+        self.log_frame(task, 0);
     }
 
     /// Flushes everything; call before the process ends.

@@ -1,7 +1,7 @@
 //! `quadwalk bench`: physics steps per second of the robot standing, one
 //! world per thread, each thread stepping its own world.
 
-use std::sync::Barrier;
+use std::sync::{Barrier, Mutex};
 use std::time::Instant;
 
 use anyhow::Result;
@@ -10,6 +10,7 @@ use serde_json::json;
 
 use robot::scripted::ScriptedCrawl;
 use robot::task::{Task, TaskConfig};
+use viz::{RerunSink, RolloutLogger};
 
 use crate::commands::{load_robot, make_world, parse_spec, positive_seconds};
 
@@ -42,6 +43,10 @@ pub struct BenchArgs {
     /// Print one JSON object instead of a table
     #[arg(long)]
     json: bool,
+    /// Rerun stream of the world on thread 0 during the phase-rate
+    /// measurement (default: off; its figures then include the logging)
+    #[command(flatten)]
+    rerun: crate::viz_args::RerunArgs,
 }
 
 struct Measurement {
@@ -140,7 +145,13 @@ fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement>
 /// Phases per second: each world runs the scripted crawl through the task
 /// (IK for 180 samples, PD control, 180 physics steps, observation, reward),
 /// starting a new episode whenever one ends. Episode resets are not timed.
-fn measure_phases(spec: &str, threads: usize, phases: u32) -> Result<f64> {
+/// With `logger`, the world on thread 0 is streamed.
+fn measure_phases(
+    spec: &str,
+    threads: usize,
+    phases: u32,
+    logger: Option<&Mutex<RolloutLogger>>,
+) -> Result<f64> {
     let spec = parse_spec(spec)?;
     let model = load_robot(None)?;
     let timed = on_each_thread(
@@ -150,19 +161,34 @@ fn measure_phases(spec: &str, threads: usize, phases: u32) -> Result<f64> {
             let mut task = Task::new(world, TaskConfig::default(), t as u64);
             let mut obs = vec![0.0f32; task.observation_size()];
             task.reset(&mut obs);
-            Ok((task, obs))
+            Ok((task, obs, t))
         },
-        |(mut task, mut obs)| {
+        |(mut task, mut obs, t)| {
             let crawl = ScriptedCrawl::default();
+            let mut streamed = logger.filter(|_| t == 0).map(|l| {
+                let mut guard = l.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                guard.begin_rollout();
+                guard.log_terrain(task.world().terrain());
+                guard.log_now(&task);
+                guard
+            });
             // Only whole phases (180 steps) count; a phase cut short by a
             // termination is neither timed nor counted.
             let (mut timed, mut whole) = (0.0, 0u32);
             while whole < phases {
                 if task.done() {
                     task.reset(&mut obs);
+                    if let Some(l) = streamed.as_deref_mut() {
+                        l.begin_rollout();
+                        l.log_now(&task);
+                    }
                 }
                 let start = Instant::now();
-                let outcome = task.step_phase(&crawl.action(task.phase()), &mut obs);
+                let action = crawl.action(task.phase());
+                let outcome = match streamed.as_deref_mut() {
+                    Some(l) => task.step_phase_observed(&action, &mut obs, l),
+                    None => task.step_phase(&action, &mut obs),
+                };
                 if outcome.steps == robot::action::SAMPLES_PER_PHASE {
                     timed += start.elapsed().as_secs_f64();
                     whole += 1;
@@ -193,6 +219,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             threads.push(cores);
         }
     }
+    let logger = args.rerun.open(
+        RerunSink::Off,
+        &robot::RobotModel::laikago(),
+        std::path::Path::new("quadwalk-bench.rrd"),
+        "bench",
+    )?;
+    let logger = logger.is_active().then(|| Mutex::new(logger));
+    if logger.is_some() {
+        eprintln!("note: the phase rates below include Rerun logging of the world on thread 0");
+    }
     let mut results = Vec::new();
     let mut phase_rates = Vec::new();
     for spec in &terrains {
@@ -209,7 +245,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 );
             }
             if args.phases > 0 {
-                let phases_per_s = measure_phases(spec, n, args.phases)?;
+                let phases_per_s = measure_phases(spec, n, args.phases, logger.as_ref())?;
                 if !args.json {
                     out!(
                         "{:<48} {:>6} {:>2} thread(s)  {:>9.1} phases/s  {:>8.1} ms per phase per world",
@@ -254,6 +290,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "{}",
             json!({ "cores": cores, "seconds_per_world": args.seconds, "repeat": args.repeat, "dt_s": robot::DT_SECS, "results": rows })
         );
+    }
+    if let Some(logger) = logger {
+        let mut logger = logger
+            .into_inner()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        logger.finish();
+        crate::viz_args::print_warnings(&mut logger);
     }
     Ok(())
 }

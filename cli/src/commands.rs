@@ -194,11 +194,15 @@ impl SceneArgs {
     pub fn experiment(&self) -> Result<crate::config::Experiment> {
         match (&self.config, &self.terrain) {
             (Some(path), _) => crate::config::Experiment::from_file(path),
-            (None, terrain) => Ok(crate::config::Experiment {
-                terrain: parse_spec(terrain.as_deref().unwrap_or("elastic:5cm"))?,
-                task: robot::task::TaskConfig::default(),
-            }),
+            (None, terrain) => Ok(crate::config::Experiment::for_terrain(parse_spec(
+                terrain.as_deref().unwrap_or("elastic:5cm"),
+            )?)),
         }
+    }
+
+    /// Whether --terrain or --config was given.
+    pub fn is_given(&self) -> bool {
+        self.terrain.is_some() || self.config.is_some()
     }
 
     /// The robot these flags name.
@@ -227,13 +231,37 @@ pub struct StandArgs {
     /// Print one JSON object instead of text
     #[arg(long)]
     json: bool,
+    /// Rerun stream (default: off); `phase` rate means every 0.75 s here
+    #[command(flatten)]
+    rerun: crate::viz_args::RerunArgs,
 }
 
 pub fn stand(args: &StandArgs) -> Result<()> {
     let spec = args.scene.experiment()?.terrain;
     let model = args.scene.robot()?;
     let mut world = make_world(&spec, model.clone(), args.seed, [args.x, args.y])?;
-    let report = robot::stand(&mut world, args.seconds);
+    let mut logger = args.rerun.open(
+        viz::RerunSink::Off,
+        &model,
+        Path::new("quadwalk-stand.rrd"),
+        &format!("stand on {spec}"),
+    )?;
+    logger.log_terrain(world.terrain());
+    let tiles_half_side_m = logger.settings().tiles_half_side_m;
+    let rate = logger.settings().rate;
+    let steps_per_phase = robot::action::SAMPLES_PER_PHASE;
+    if logger.is_active() {
+        logger.log_snapshot(&world.snapshot(tiles_half_side_m, 0, [args.x, args.y]));
+    }
+    let report = robot::stand::stand_observed(&mut world, args.seconds, &mut |world, step| {
+        let step_in_phase = (step as usize % steps_per_phase) + 1;
+        if logger.is_active() && rate.logs_step(step_in_phase, steps_per_phase) {
+            let phase = step as usize / steps_per_phase;
+            logger.log_snapshot(&world.snapshot(tiles_half_side_m, phase, [args.x, args.y]));
+        }
+    });
+    logger.finish();
+    crate::viz_args::print_warnings(&mut logger);
     if args.json {
         let out = json!({
             "terrain": spec.to_string(),
@@ -250,6 +278,7 @@ pub fn stand(args: &StandArgs) -> Result<()> {
             "expected_sink_m": report.expected_sink_m,
             "window_secs": report.window_secs,
             "non_foot_contacts": report.non_foot_contacts,
+            "rerun_frames": logger.frames_logged(),
         });
         out!("{out}");
     } else {

@@ -1,5 +1,27 @@
-//! Experiment files in TOML: `[terrain]` and `[task]` (later issues add
-//! PPO and run sections). Unknown keys are errors.
+//! Experiment files in TOML: `[terrain]`, `[task]`, `[ppo]`, `[train]` and
+//! `[[curriculum]]`. Every section but the terrain is optional (defaults
+//! where silent); unknown keys are errors.
+//!
+//! ```toml
+//! [ppo]                   # learn::PpoConfig; the paper's values are the defaults
+//! learning_rate = 2e-4
+//! steps_per_env = 40
+//!
+//! [train]
+//! envs = 16               # parallel worlds
+//! iterations = 100        # ignored when a curriculum is given (the sum of its stages)
+//! seed = 0
+//! checkpoint_every = 10   # iterations
+//! keep_checkpoints = 5    # older ones are deleted
+//! rerun_envs = [0]        # environments whose rollouts are streamed
+//!
+//! [[curriculum]]          # stages in order; replaces [terrain]
+//! terrain = "varying:2m:2,3,4,5cm,rigid"
+//! iterations = 200
+//! [[curriculum]]
+//! terrain = "elastic:5cm"
+//! iterations = 100
+//! ```
 //!
 //! ```toml
 //! [task]
@@ -34,12 +56,13 @@
 use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
+use learn::PpoConfig;
 use robot::task::{ObservationConfig, TaskConfig};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
 
 /// The sections an experiment file may have.
-const KNOWN_SECTIONS: [&str; 2] = ["terrain", "task"];
+const KNOWN_SECTIONS: [&str; 5] = ["terrain", "task", "ppo", "train", "curriculum"];
 
 /// A parsed experiment file.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,6 +71,88 @@ pub struct Experiment {
     pub terrain: TerrainSpec,
     /// the task settings (defaults where the file is silent)
     pub task: TaskConfig,
+    /// PPO settings
+    pub ppo: PpoConfig,
+    /// the training run's settings
+    pub train: TrainSettings,
+    /// curriculum stages, in order (empty: the terrain for all iterations)
+    pub curriculum: Vec<Stage>,
+}
+
+/// `[train]`: how a training run is laid out.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrainSettings {
+    /// parallel environments (worlds)
+    pub envs: usize,
+    /// iterations (without a curriculum)
+    pub iterations: u64,
+    /// the run's seed: networks, sampling, start positions, terrain draws
+    pub seed: u64,
+    /// a checkpoint every this many iterations (and at the end, and on Ctrl-C)
+    pub checkpoint_every: u64,
+    /// checkpoints kept (the newest)
+    pub keep_checkpoints: usize,
+    /// environments whose rollouts go to Rerun
+    pub rerun_envs: Vec<usize>,
+}
+
+impl Default for TrainSettings {
+    fn default() -> Self {
+        Self {
+            envs: 16,
+            iterations: 100,
+            seed: 0,
+            checkpoint_every: 10,
+            keep_checkpoints: 5,
+            rerun_envs: vec![0],
+        }
+    }
+}
+
+impl TrainSettings {
+    /// Checks the values; the error names the key.
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=4096).contains(&self.envs) {
+            bail!("train.envs = {}: must be in 1..=4096", self.envs);
+        }
+        if !(1..=10_000_000).contains(&self.iterations) {
+            bail!(
+                "train.iterations = {}: must be in 1..=10000000",
+                self.iterations
+            );
+        }
+        if self.checkpoint_every == 0 {
+            bail!("train.checkpoint_every = 0: must be at least 1");
+        }
+        if self.keep_checkpoints == 0 {
+            bail!("train.keep_checkpoints = 0: must be at least 1");
+        }
+        if let Some(bad) = self.rerun_envs.iter().find(|&&e| e >= self.envs) {
+            bail!(
+                "train.rerun_envs holds {bad}, but there are only {} environments (0..{})",
+                self.envs,
+                self.envs
+            );
+        }
+        Ok(())
+    }
+}
+
+/// One curriculum stage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stage {
+    /// the terrain of this stage
+    pub terrain: TerrainSpec,
+    /// iterations in this stage
+    pub iterations: u64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StageSection {
+    terrain: String,
+    iterations: u64,
 }
 
 impl Experiment {
@@ -71,7 +176,29 @@ impl Experiment {
                 );
             }
         }
-        let terrain = terrain_from_table(&doc, source)?;
+        let curriculum = curriculum_from_doc(&doc, source)?;
+        let terrain = match (doc.get("terrain"), curriculum.first()) {
+            (None, Some(first)) => first.terrain.clone(),
+            _ => terrain_from_table(&doc, source)?,
+        };
+        let ppo: PpoConfig = match doc.get("ppo") {
+            None => PpoConfig::default(),
+            Some(value) => value
+                .clone()
+                .try_into()
+                .map_err(|e: toml::de::Error| anyhow!("config {source} [ppo]: {}", e.message()))?,
+        };
+        ppo.validate()
+            .map_err(|e| anyhow!("config {source} [ppo]: {e}"))?;
+        let train: TrainSettings = match doc.get("train") {
+            None => TrainSettings::default(),
+            Some(value) => value.clone().try_into().map_err(|e: toml::de::Error| {
+                anyhow!("config {source} [train]: {}", e.message())
+            })?,
+        };
+        train
+            .validate()
+            .with_context(|| format!("config {source} [train]"))?;
         let task = match doc.get("task") {
             None => TaskConfig::default(),
             Some(value) => {
@@ -84,8 +211,128 @@ impl Experiment {
                     .map_err(|e| anyhow!("config {source} [task]: {e}"))?
             }
         };
-        Ok(Self { terrain, task })
+        Ok(Self {
+            terrain,
+            task,
+            ppo,
+            train,
+            curriculum,
+        })
     }
+
+    /// The experiment for a terrain spec with every other setting at its
+    /// default.
+    pub fn for_terrain(terrain: TerrainSpec) -> Self {
+        Self {
+            terrain,
+            task: TaskConfig::default(),
+            ppo: PpoConfig::default(),
+            train: TrainSettings::default(),
+            curriculum: Vec::new(),
+        }
+    }
+
+    /// Total training iterations: the curriculum's sum, else `train.iterations`.
+    pub fn total_iterations(&self) -> u64 {
+        if self.curriculum.is_empty() {
+            self.train.iterations
+        } else {
+            self.curriculum.iter().map(|s| s.iterations).sum()
+        }
+    }
+
+    /// The terrain of 0-based iteration `iteration`, and the stage index.
+    pub fn terrain_at(&self, iteration: u64) -> (usize, &TerrainSpec) {
+        let mut end = 0;
+        for (k, stage) in self.curriculum.iter().enumerate() {
+            end += stage.iterations;
+            if iteration < end {
+                return (k, &stage.terrain);
+            }
+        }
+        match self.curriculum.last() {
+            Some(last) => (self.curriculum.len() - 1, &last.terrain),
+            None => (0, &self.terrain),
+        }
+    }
+
+    /// The whole experiment as TOML, every value spelt out; parsing it
+    /// gives this experiment back.
+    pub fn to_toml(&self) -> String {
+        let t = &self.task;
+        let o = &t.observation;
+        let mut text = format!(
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
+            self.terrain.to_string(),
+            t.goal_spacing_m,
+            t.goal_reached_m,
+            t.max_phases,
+            t.start_x_range_m.0,
+            t.start_x_range_m.1,
+            t.start_y_range_m.0,
+            t.start_y_range_m.1,
+            t.min_base_height_m,
+            t.max_pitch_deg,
+            t.termination_reward,
+            t.settle_secs,
+            o.foot_history,
+            o.short_history,
+            o.foot_velocity,
+        );
+        let mut tables = toml::Table::new();
+        tables.insert(
+            "ppo".into(),
+            toml::Value::try_from(&self.ppo).expect("PPO settings serialise"),
+        );
+        tables.insert(
+            "train".into(),
+            toml::Value::try_from(&self.train).expect("train settings serialise"),
+        );
+        text.push_str(&toml::to_string(&tables).expect("a table serialises"));
+        for stage in &self.curriculum {
+            text.push_str(&format!(
+                "\n[[curriculum]]\nterrain = {:?}\niterations = {}\n",
+                stage.terrain.to_string(),
+                stage.iterations
+            ));
+        }
+        text
+    }
+}
+
+/// Reads `[[curriculum]]`; `source` names the file in errors.
+fn curriculum_from_doc(doc: &toml::Table, source: &str) -> Result<Vec<Stage>> {
+    let Some(value) = doc.get("curriculum") else {
+        return Ok(Vec::new());
+    };
+    let stages: Vec<StageSection> = value.clone().try_into().map_err(|e: toml::de::Error| {
+        anyhow!(
+            "config {source} [[curriculum]]: {} (each stage needs terrain = \"SPEC\" and iterations = N)",
+            e.message()
+        )
+    })?;
+    if stages.is_empty() {
+        bail!("config {source} [[curriculum]]: no stages");
+    }
+    let registry = Registry::builtin();
+    stages
+        .into_iter()
+        .enumerate()
+        .map(|(k, stage)| {
+            if stage.iterations == 0 {
+                bail!(
+                    "config {source} [[curriculum]] stage {}: iterations must be at least 1",
+                    k + 1
+                );
+            }
+            Ok(Stage {
+                terrain: registry
+                    .parse(&stage.terrain)
+                    .with_context(|| format!("config {source} [[curriculum]] stage {}", k + 1))?,
+                iterations: stage.iterations,
+            })
+        })
+        .collect()
 }
 
 /// `[task]`: every key optional, defaults from [`TaskConfig::default`].
@@ -271,6 +518,97 @@ mod tests {
             let err = format!("{:#}", Experiment::from_toml(text, "t.toml").unwrap_err());
             assert!(
                 err.contains(expected) && err.contains("t.toml [task]"),
+                "{text:?} gave {err:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn resolved_toml_parses_back_to_the_same_experiment() {
+        let text = "[[curriculum]]\nterrain = \"varying:2m:2,3,4,5cm,rigid\"\niterations = 3\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n[ppo]\nlearning_rate = 1e-3\ntarget_kl = 0.02\n[train]\nenvs = 4\nrerun_envs = [0, 3]\n[task]\nmax_phases = 12\n[task.observation]\nshort_history = false\n";
+        let e = Experiment::from_toml(text, "c.toml").unwrap();
+        assert_eq!(e.total_iterations(), 5);
+        assert_eq!(e.terrain.to_string(), "varying:2m:2cm,3cm,4cm,5cm,rigid");
+        assert_eq!(e.terrain_at(2).0, 0);
+        assert_eq!(e.terrain_at(3).1.to_string(), "elastic:5cm");
+        assert_eq!(e.terrain_at(99).0, 1);
+        let back = Experiment::from_toml(&e.to_toml(), "resolved").unwrap();
+        assert_eq!(back, e);
+        let plain = Experiment::for_terrain(Registry::builtin().parse("rigid").unwrap());
+        assert_eq!(Experiment::from_toml(&plain.to_toml(), "r").unwrap(), plain);
+    }
+
+    #[test]
+    fn the_shipped_configs_parse() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs");
+        let mut seen = Vec::new();
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let e = Experiment::from_file(&path).unwrap_or_else(|e| panic!("{e:#}"));
+                seen.push((path.file_stem().unwrap().to_string_lossy().to_string(), e));
+            }
+        }
+        seen.sort_by(|a, b| a.0.cmp(&b.0));
+        let names: Vec<&str> = seen.iter().map(|(n, _)| n.as_str()).collect();
+        for name in ["tv2", "tv8", "tc2", "tc5", "ablation-no-foot-history"] {
+            assert!(names.contains(&name), "{name} missing: {names:?}");
+        }
+        let get = |name: &str| &seen.iter().find(|(n, _)| n == name).unwrap().1;
+        // T_c^5 is one file: T_v2, then constant 5 cm
+        let tc5 = get("tc5");
+        assert_eq!(tc5.curriculum.len(), 2);
+        assert_eq!(
+            tc5.curriculum[0].terrain.to_string(),
+            "varying:2m:2cm,3cm,4cm,5cm,rigid"
+        );
+        assert_eq!(tc5.curriculum[1].terrain.to_string(), "elastic:5cm");
+        assert_eq!(
+            get("ablation-no-foot-history").task.observation.size(),
+            102 - 36
+        );
+        assert_eq!(
+            get("ablation-no-foot-velocity").task.observation.size(),
+            102 - 12
+        );
+        assert_eq!(
+            get("ablation-no-short-history").task.observation.size(),
+            102 - 24
+        );
+    }
+
+    #[test]
+    fn bad_training_sections_name_the_key() {
+        for (text, expected) in [
+            (
+                "[terrain]\nspec = \"rigid\"\n[ppo]\ngamma = 2.0\n",
+                "ppo.gamma = 2",
+            ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[ppo]\ngama = 0.9\n",
+                "unknown field `gama`",
+            ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[train]\nenvs = 0\n",
+                "train.envs = 0",
+            ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[train]\nenvs = 2\nrerun_envs = [2]\n",
+                "rerun_envs holds 2",
+            ),
+            (
+                "[[curriculum]]\nterrain = \"elastic:9\"\niterations = 2\n",
+                "stage 1",
+            ),
+            (
+                "[[curriculum]]\nterrain = \"rigid\"\niterations = 0\n",
+                "at least 1",
+            ),
+            ("[[curriculum]]\nterrain = \"rigid\"\n", "iterations"),
+        ] {
+            let err = format!("{:#}", Experiment::from_toml(text, "t.toml").unwrap_err());
+            assert!(
+                err.contains(expected) && err.contains("t.toml"),
                 "{text:?} gave {err:?}"
             );
         }

@@ -17,6 +17,8 @@ mod bench;
 mod commands;
 mod config;
 mod rollout;
+mod task_env;
+mod train;
 mod viz_args;
 
 use std::path::PathBuf;
@@ -43,6 +45,8 @@ enum Command {
     Rollout(rollout::RolloutArgs),
     /// Run a policy and watch it in the Rerun viewer (rollout with --rerun spawn by default).
     Play(rollout::PlayArgs),
+    /// Train a policy with PPO on parallel worlds (checkpoints, --resume, Rerun)
+    Train(train::TrainArgs),
     /// Measure physics steps per second of the robot standing, one world per thread.
     Bench(bench::BenchArgs),
 }
@@ -80,6 +84,7 @@ fn main() -> ExitCode {
         Command::Stand(args) => commands::stand(&args),
         Command::Rollout(args) => rollout::rollout(&args),
         Command::Play(args) => rollout::play(&args),
+        Command::Train(args) => train::train(&args),
         Command::Bench(args) => bench::run(&args),
     };
     match result {

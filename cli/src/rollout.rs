@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use robot::scripted::ScriptedCrawl;
 use robot::task::{RewardTerms, Task};
@@ -18,7 +18,8 @@ use crate::viz_args::{RerunArgs, print_warnings};
 /// Arguments of `quadwalk rollout`.
 #[derive(Debug, Args)]
 pub struct RolloutArgs {
-    /// Policy: `scripted` (the documented crawl)
+    /// Policy: `scripted` (the documented crawl) or a trained checkpoint
+    /// (a run directory or one of its checkpoints; deterministic mean action)
     #[arg(long, default_value = "scripted")]
     policy: String,
     #[command(flatten)]
@@ -26,9 +27,12 @@ pub struct RolloutArgs {
     /// Phases to run (0.75 s each), unless the episode terminates first
     #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     phases: u32,
-    /// Seed: start position and the varying terrain's draw
+    /// Seed: start position, the varying terrain's draw, and the samples of --stochastic
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Sample a trained policy's actions from its Gaussian instead of taking the mean
+    #[arg(long)]
+    stochastic: bool,
     /// Print one JSON object instead of text
     #[arg(long)]
     json: bool,
@@ -39,17 +43,24 @@ pub struct RolloutArgs {
 /// Arguments of `quadwalk play`.
 #[derive(Debug, Args)]
 pub struct PlayArgs {
-    /// Policy: `scripted` (the documented crawl)
-    #[arg(long, default_value = "scripted")]
+    /// Policy: `scripted` (the documented crawl) or a trained checkpoint
+    /// (a run directory or one of its checkpoints; deterministic mean action)
+    #[arg(long, default_value = "scripted", conflicts_with = "checkpoint")]
     policy: String,
+    /// A trained checkpoint to play (the same as --policy DIR)
+    #[arg(long, value_name = "DIR")]
+    checkpoint: Option<std::path::PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
     /// Phases to run (0.75 s each), unless the episode terminates first
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     phases: u32,
-    /// Seed: start position and the varying terrain's draw
+    /// Seed: start position, the varying terrain's draw, and the samples of --stochastic
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Sample a trained policy's actions from its Gaussian instead of taking the mean
+    #[arg(long)]
+    stochastic: bool,
     /// Print one JSON object instead of text
     #[arg(long)]
     json: bool,
@@ -65,6 +76,7 @@ struct Run<'a> {
     scene: &'a SceneArgs,
     phases: u32,
     seed: u64,
+    stochastic: bool,
     json: bool,
     rerun: &'a RerunArgs,
     default_sink: RerunSink,
@@ -78,6 +90,7 @@ pub fn rollout(args: &RolloutArgs) -> Result<()> {
         scene: &args.scene,
         phases: args.phases,
         seed: args.seed,
+        stochastic: args.stochastic,
         json: args.json,
         rerun: &args.rerun,
         default_sink: RerunSink::Off,
@@ -86,16 +99,86 @@ pub fn rollout(args: &RolloutArgs) -> Result<()> {
 
 /// `quadwalk play`.
 pub fn play(args: &PlayArgs) -> Result<()> {
+    let checkpoint = args.checkpoint.as_ref().map(|p| p.display().to_string());
     run(&Run {
         command: "play",
-        policy: &args.policy,
+        policy: checkpoint.as_deref().unwrap_or(&args.policy),
         scene: &args.scene,
         phases: args.phases,
         seed: args.seed,
+        stochastic: args.stochastic,
         json: args.json,
         rerun: &args.rerun,
         default_sink: RerunSink::Spawn,
     })
+}
+
+/// What chooses the actions.
+enum Policy {
+    /// the scripted crawl
+    Scripted(ScriptedCrawl),
+    /// a trained checkpoint, mean action
+    Trained {
+        trainer: Box<learn::Trainer>,
+        observation: robot::task::ObservationConfig,
+        /// set: sample actions with this generator; unset: the mean action
+        sampler: Option<rand_chacha::ChaCha8Rng>,
+    },
+}
+
+impl Policy {
+    /// `scripted`, or a checkpoint path; `sample_seed` makes a trained
+    /// policy sample its actions.
+    fn from_arg(arg: &str, sample_seed: Option<u64>) -> Result<Self> {
+        if arg == "scripted" {
+            if sample_seed.is_some() {
+                bail!(
+                    "--stochastic needs a trained policy; the scripted crawl has no distribution"
+                );
+            }
+            return Ok(Self::Scripted(ScriptedCrawl::default()));
+        }
+        let path = Path::new(arg);
+        if !path.exists() {
+            bail!(
+                "policy {arg:?} is neither `scripted` nor an existing checkpoint or run directory"
+            );
+        }
+        let dir =
+            learn::checkpoint::resolve_checkpoint(path).with_context(|| format!("policy {arg}"))?;
+        let trainer = learn::Trainer::load(&dir).with_context(|| format!("policy {arg}"))?;
+        let config = crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE))
+            .with_context(|| format!("policy {arg}"))?;
+        let observation = config.task.observation;
+        if trainer.policy.obs_size() != observation.size()
+            || trainer.policy.action_size() != robot::action::ACTION_SIZE
+        {
+            bail!(
+                "policy {arg}: its networks take {} observations and give {} actions, but its config says {} and {}",
+                trainer.policy.obs_size(),
+                trainer.policy.action_size(),
+                observation.size(),
+                robot::action::ACTION_SIZE
+            );
+        }
+        Ok(Self::Trained {
+            trainer: Box::new(trainer),
+            observation,
+            sampler: sample_seed.map(rand::SeedableRng::seed_from_u64),
+        })
+    }
+
+    fn action(&mut self, task: &Task, obs: &[f32]) -> Result<Vec<f32>> {
+        Ok(match self {
+            Self::Scripted(crawl) => crawl.action(task.phase()).to_vec(),
+            Self::Trained {
+                trainer,
+                sampler: Some(rng),
+                ..
+            } => trainer.act_stochastic(obs, rng)?,
+            Self::Trained { trainer, .. } => trainer.act_deterministic(obs)?,
+        })
+    }
 }
 
 /// Summary statistics of a series.
@@ -111,12 +194,11 @@ fn stats(values: &[f64]) -> serde_json::Value {
 fn run(args: &Run) -> Result<()> {
     let experiment = args.scene.experiment()?;
     let (spec, mut task_config) = (experiment.terrain, experiment.task);
-    let crawl = match args.policy {
-        "scripted" => ScriptedCrawl::default(),
-        other => bail!(
-            "policy {other:?} is not known (known: scripted; trained checkpoints arrive with `quadwalk train`)"
-        ),
-    };
+    let mut policy = Policy::from_arg(args.policy, args.stochastic.then_some(args.seed))?;
+    if let Policy::Trained { observation, .. } = &policy {
+        // the observation layout the policy was trained with
+        task_config.observation = *observation;
+    }
     task_config.max_phases = args.phases as usize;
     let model = args.scene.robot()?;
     let world = make_world(&spec, model, args.seed, [0.0, 0.0])?;
@@ -145,7 +227,7 @@ fn run(args: &Run) -> Result<()> {
     let mut regions: Vec<String> = Vec::new();
     let mut phases = 0;
     while !task.done() {
-        let action = crawl.action(task.phase());
+        let action = policy.action(&task, &obs)?;
         let outcome = task.step_phase_observed(&action, &mut obs, &mut logger);
         print_warnings(&mut logger);
         phases += 1;

@@ -32,7 +32,22 @@ impl RerunArgs {
         default_file: &Path,
         recording_name: &str,
     ) -> Result<RolloutLogger> {
-        let sink = self.rerun.clone().unwrap_or(default_sink);
+        self.open_sink(self.sink(default_sink), model, default_file, recording_name)
+    }
+
+    /// The sink: `--rerun`, else `default_sink`.
+    pub fn sink(&self, default_sink: RerunSink) -> RerunSink {
+        self.rerun.clone().unwrap_or(default_sink)
+    }
+
+    /// Opens `sink` with these flags' rate (see [`Self::open`]).
+    pub fn open_sink(
+        &self,
+        sink: RerunSink,
+        model: &RobotModel,
+        default_file: &Path,
+        recording_name: &str,
+    ) -> Result<RolloutLogger> {
         let settings = VizSettings {
             rate: self.rerun_rate,
             ..VizSettings::default()

@@ -32,6 +32,16 @@ pub struct StandReport {
 
 /// Lets the robot stand for `seconds` holding its current PD targets.
 pub fn stand(world: &mut World, seconds: f64) -> StandReport {
+    stand_observed(world, seconds, &mut |_, _| {})
+}
+
+/// [`stand`], calling `after_step(world, step)` (0-based) after every
+/// physics step (for loggers and viewers).
+pub fn stand_observed(
+    world: &mut World,
+    seconds: f64,
+    after_step: &mut dyn FnMut(&World, u64),
+) -> StandReport {
     let steps = (seconds / crate::DT_SECS).round().max(1.0) as u64;
     let window_secs = SETTLED_WINDOW_SECS.min(seconds / 2.0);
     let window_start = steps.saturating_sub((window_secs / crate::DT_SECS).round() as u64);
@@ -41,6 +51,7 @@ pub fn stand(world: &mut World, seconds: f64) -> StandReport {
     let mut non_foot: Vec<String> = Vec::new();
     for step in 0..steps {
         world.step();
+        after_step(world, step);
         max_tilt_rad = max_tilt_rad.max(world.tilt_rad());
         for link in world.ground_contacts().non_foot_links {
             if !non_foot.contains(&link) {

@@ -399,6 +399,11 @@ impl Task {
         self.episode.goals_reached
     }
 
+    /// Re-seeds the start-position draw (as [`Self::new`]'s `seed` does).
+    pub fn set_seed(&mut self, seed: u64) {
+        self.rng = ChaCha8Rng::seed_from_u64(seed);
+    }
+
     /// Starts an episode at a seeded random position; writes the first
     /// observation into `obs`.
     pub fn reset(&mut self, obs: &mut [f32]) {
@@ -594,30 +599,13 @@ impl Task {
     /// The state now, for loggers and viewers; `tiles_half_side_m` sets the
     /// square around the base whose tiles are included (0: none).
     pub fn snapshot(&self, tiles_half_side_m: f64) -> StepSnapshot {
-        let base = self.world.base_pose();
-        let (roll, pitch, yaw) = base.rotation.euler_angles();
-        let mut tiles = Vec::new();
-        if tiles_half_side_m > 0.0 {
-            let centre = [base.translation.x, base.translation.y];
-            self.world.terrain().tiles_in(
-                self.world.physics(),
-                terrain_plugins::Rect::around(centre, tiles_half_side_m),
-                &mut tiles,
-            );
-        }
         // During a phase `episode.phase` is the running phase; between
         // phases it is the next one.
-        StepSnapshot {
-            sim_time_s: self.world.time_secs(),
-            phase: self.episode.phase,
-            body_poses: self.world.body_poses(),
-            base_rpy_rad: [roll, pitch, yaw],
-            base_height_m: self.base_height_m(),
-            joint_torques_n_m: self.world.applied_torques_n_m().to_vec(),
-            contact_points_m: self.world.ground_contact_points_m(),
-            tiles,
-            goal_xy_m: self.episode.goal_xy_m,
-        }
+        self.world.snapshot(
+            tiles_half_side_m,
+            self.episode.phase,
+            self.episode.goal_xy_m,
+        )
     }
 
     fn advance_goals(&mut self) -> usize {
@@ -665,16 +653,12 @@ impl Task {
 
     /// The base height the reward and termination use: the mean of h_b, m.
     pub fn base_height_m(&self) -> f64 {
-        self.hip_heights_m().iter().sum::<f64>() / 4.0
+        self.world.base_height_m()
     }
 
     /// h_b: height of each hip (abduction) joint above the terrain right below it.
     pub fn hip_heights_m(&self) -> [f64; 4] {
-        let base = self.world.base_pose();
-        std::array::from_fn(|leg| {
-            let hip = base * nalgebra::Point3::from(self.world.legs()[leg].abduction_m);
-            hip.z - self.world.surface_height_m(hip.x, hip.y)
-        })
+        self.world.hip_heights_m()
     }
 
     /// The goal's position in the base frame (x, y; z dropped).

@@ -360,6 +360,55 @@ impl World {
         self.contacts(false).non_foot_links
     }
 
+    /// h_b: height of each hip (abduction) joint above the terrain right
+    /// below it, m.
+    pub fn hip_heights_m(&self) -> [f64; 4] {
+        let base = self.base_pose();
+        std::array::from_fn(|leg| {
+            let hip = base * Point3::from(self.legs()[leg].abduction_m);
+            hip.z - self.surface_height_m(hip.x, hip.y)
+        })
+    }
+
+    /// The mean of h_b, the base height the task's reward and termination
+    /// use, m.
+    pub fn base_height_m(&self) -> f64 {
+        self.hip_heights_m().iter().sum::<f64>() / 4.0
+    }
+
+    /// The state now, for loggers and viewers: `tiles_half_side_m` sets the
+    /// square around the base whose tiles are included (0: none); `phase`
+    /// and `goal_xy_m` are the caller's (the task's).
+    pub fn snapshot(
+        &self,
+        tiles_half_side_m: f64,
+        phase: usize,
+        goal_xy_m: [f64; 2],
+    ) -> crate::snapshot::StepSnapshot {
+        let base = self.base_pose();
+        let (roll, pitch, yaw) = base.rotation.euler_angles();
+        let mut tiles = Vec::new();
+        if tiles_half_side_m > 0.0 {
+            let centre = [base.translation.x, base.translation.y];
+            self.terrain().tiles_in(
+                self.physics(),
+                terrain_plugins::Rect::around(centre, tiles_half_side_m),
+                &mut tiles,
+            );
+        }
+        crate::snapshot::StepSnapshot {
+            sim_time_s: self.time_secs(),
+            phase,
+            body_poses: self.body_poses(),
+            base_rpy_rad: [roll, pitch, yaw],
+            base_height_m: self.base_height_m(),
+            joint_torques_n_m: self.applied_torques_n_m().to_vec(),
+            contact_points_m: self.ground_contact_points_m(),
+            tiles,
+            goal_xy_m,
+        }
+    }
+
     /// Where the robot touches the ground now, world frame, m: one point
     /// (midway between the two surfaces) per robot collider and terrain
     /// collider within [`TOUCH_DISTANCE_M`] of each other, with the leg

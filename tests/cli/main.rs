@@ -6,7 +6,9 @@ use std::process::{Command, Output};
 
 use serde_json::Value;
 
+#[cfg(feature = "rerun")]
 mod rerun_stream;
+mod train;
 
 fn quadwalk(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_quadwalk"))
@@ -405,7 +407,7 @@ fn rollout_reports_termination_and_refuses_unknown_policies() {
     assert!(r["phases"].as_u64().unwrap() < 20);
     let stderr = failure(&["rollout", "--policy", "runs/none"], 1);
     assert!(
-        stderr.contains("policy \"runs/none\" is not known"),
+        stderr.contains("policy \"runs/none\" is neither `scripted` nor an existing checkpoint"),
         "{stderr}"
     );
     let stderr = failure(&["rollout", "--phases", "0"], 2);

@@ -52,6 +52,15 @@ fn scratch(name: &str) -> PathBuf {
     path
 }
 
+/// The strings of a JSON array.
+fn strings(list: &Value) -> Vec<&str> {
+    list.as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e.as_str().unwrap())
+        .collect()
+}
+
 /// What the Python reader finds in an `.rrd`: see `read_rrd.py`.
 fn read_rrd(path: &Path) -> Value {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/cli/read_rrd.py");
@@ -172,12 +181,7 @@ fn a_saved_rollout_holds_the_simulations_values() {
     );
 
     let content = read_rrd(&rrd);
-    let entities: Vec<&str> = content["entities"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|e| e.as_str().unwrap())
-        .collect();
+    let entities: Vec<&str> = strings(&content["entities"]);
     for path in [
         "/world/robot/chassis",
         "/world/robot/chassis/shape_0",
@@ -379,4 +383,129 @@ fn a_live_stream_reaches_a_receiver_and_a_missing_one_is_a_warning() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("warning: no Rerun viewer at"), "{stderr}");
+}
+
+/// Training streams env 0's rollouts with `iteration` on their timeline,
+/// and the training curves as scalars.
+#[test]
+fn training_streams_rollouts_and_curves() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rerun-train");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = dir.join("tiny.toml");
+    std::fs::write(
+        &config,
+        "[terrain]\nspec = \"elastic:5cm\"\n[task]\nmax_phases = 3\n[ppo]\nhidden_sizes = [8]\nsteps_per_env = 3\nminibatch_size = 6\nepochs = 1\n[train]\nenvs = 2\nrerun_envs = [0, 1]\n",
+    )
+    .unwrap();
+    let rrd = dir.join("train.rrd");
+    let out = Command::new(env!("CARGO_BIN_EXE_quadwalk"))
+        .args([
+            "train",
+            "--config",
+            config.to_str().unwrap(),
+            "--run-dir",
+            dir.join("run").to_str().unwrap(),
+        ])
+        .args([
+            "--iterations",
+            "2",
+            "--rerun",
+            &format!("save:{}", rrd.display()),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let content = read_rrd(&rrd);
+    let entities: Vec<&str> = strings(&content["entities"]);
+    let timelines: Vec<&str> = strings(&content["timelines"]);
+    for entity in [
+        "/train/mean_return",
+        "/train/policy_loss",
+        "/train/phases_per_s",
+        "/world/robot/chassis",
+        "/world/terrain/tiles",
+    ] {
+        assert!(entities.contains(&entity), "{entity} missing: {entities:?}");
+    }
+    assert!(timelines.contains(&"iteration"), "{timelines:?}");
+    // two iterations x (reset + 3 phases) of env 0
+    assert_eq!(content["phase_starts"], 6, "{content}");
+    // env 1 goes to its own file
+    let second = read_rrd(&dir.join("train-env1.rrd"));
+    assert_eq!(second["phase_starts"], 6, "{second}");
+}
+
+/// `stand` takes the same `--rerun` flags: a 3 s stand logged every 90
+/// steps gives 1 + 8 frames of the robot and the tiles.
+#[test]
+fn stand_streams_too() {
+    let rrd = scratch("stand.rrd");
+    let out = Command::new(env!("CARGO_BIN_EXE_quadwalk"))
+        .args([
+            "stand",
+            "--terrain",
+            "elastic:5cm",
+            "--seconds",
+            "3",
+            "--json",
+        ])
+        .args([
+            "--rerun",
+            &format!("save:{}", rrd.display()),
+            "--rerun-rate",
+            "90",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["rerun_frames"], 9, "{report}");
+    let content = read_rrd(&rrd);
+    assert_eq!(content["base_positions"].as_array().unwrap().len(), 9);
+    assert_eq!(content["tile_sinks"].as_array().unwrap().len(), 9);
+    // the last frame: the robot has sunk into the 5 cm tiles
+    let last = content["tile_sinks"].as_array().unwrap().last().unwrap()["sinks_m"]
+        .as_array()
+        .unwrap()
+        .clone();
+    let deepest = last.iter().map(|v| v.as_f64().unwrap()).fold(0.0, f64::max);
+    assert!(deepest > 0.03, "no tile sank: {last:?}");
+}
+
+/// `bench --rerun` streams the world on thread 0 of the phase-rate
+/// measurement: 2 phases give 2 sets of curves.
+#[test]
+fn bench_streams_its_phase_world() {
+    let rrd = scratch("bench.rrd");
+    let out = Command::new(env!("CARGO_BIN_EXE_quadwalk"))
+        .args([
+            "bench",
+            "--terrain",
+            "rigid",
+            "--threads",
+            "1",
+            "--seconds",
+            "0.1",
+        ])
+        .args(["--repeat", "1", "--phases", "2", "--json"])
+        .args(["--rerun", &format!("save:{}", rrd.display())])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("include Rerun logging"));
+    let content = read_rrd(&rrd);
+    assert_eq!(content["phase_starts"], 2, "{content}");
 }

@@ -1,0 +1,286 @@
+//! `TaskEnv`: N locomotion tasks as one `learn::VecEnv`, stepped in
+//! parallel on a rayon pool (one world per task, worlds share nothing), with
+//! Rerun loggers on the environments the run streams.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use learn::trainer::derive_seed;
+use learn::{StepResult, VecEnv};
+use rayon::prelude::*;
+use robot::RobotModel;
+use robot::action::ACTION_SIZE;
+use robot::snapshot::{NoObserver, PhaseObserver, PhaseStart};
+use robot::task::{PhaseOutcome, RewardTerms, Task, TaskConfig};
+use terrain_plugins::TerrainSpec;
+use viz::RolloutLogger;
+
+use crate::commands::make_world;
+
+/// Per-episode metrics, in the order of `episode_metrics`.
+pub const EPISODE_METRICS: [&str; 2] = ["distance_m", "goals_reached"];
+
+/// A logger on one environment, timing what it costs.
+pub struct EnvLogger {
+    /// the environment it watches
+    pub env: usize,
+    /// the logger
+    pub logger: RolloutLogger,
+    /// seconds spent logging
+    pub secs: f64,
+}
+
+impl EnvLogger {
+    /// A new episode: forget the trajectory, log the state after the reset.
+    fn log_reset(&mut self, task: &Task) {
+        let clock = Instant::now();
+        self.logger.begin_rollout();
+        self.logger.log_now(task);
+        self.secs += clock.elapsed().as_secs_f64();
+    }
+}
+
+/// Times the observer calls of a logger.
+struct Timed<'a>(&'a mut EnvLogger);
+
+impl PhaseObserver for Timed<'_> {
+    fn phase_started(&mut self, task: &Task, start: &PhaseStart) {
+        let clock = Instant::now();
+        self.0.logger.phase_started(task, start);
+        self.0.secs += clock.elapsed().as_secs_f64();
+    }
+
+    fn stepped(&mut self, task: &Task, step_in_phase: usize) {
+        let clock = Instant::now();
+        self.0.logger.stepped(task, step_in_phase);
+        self.0.secs += clock.elapsed().as_secs_f64();
+    }
+
+    fn phase_ended(&mut self, task: &Task, outcome: &PhaseOutcome) {
+        let clock = Instant::now();
+        self.0.logger.phase_ended(task, outcome);
+        self.0.secs += clock.elapsed().as_secs_f64();
+    }
+}
+
+/// N tasks behind `learn::VecEnv`.
+///
+/// `reset_all` builds every world afresh (a few ms each): a rapier world
+/// that has been stepped keeps solver caches and contact state that a reset
+/// of bodies does not clear, and an iteration must start from the same
+/// state whether the run was resumed or not.
+pub struct TaskEnv {
+    tasks: Vec<Task>,
+    terrain: TerrainSpec,
+    model: Arc<RobotModel>,
+    task_config: TaskConfig,
+    terrain_seed: u64,
+    /// one slot per task: its logger, if streamed
+    loggers: Vec<Option<EnvLogger>>,
+    obs_size: usize,
+    pool: rayon::ThreadPool,
+    interrupted: Arc<AtomicBool>,
+}
+
+impl TaskEnv {
+    /// `envs` worlds on `terrain`; world `i`'s terrain draw is seeded by
+    /// `(seed, i)`. Stepped on `threads` threads.
+    pub fn new(
+        terrain: &TerrainSpec,
+        model: &Arc<RobotModel>,
+        task: &TaskConfig,
+        envs: usize,
+        seed: u64,
+        threads: usize,
+        interrupted: Arc<AtomicBool>,
+    ) -> Result<Self> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .context("cannot start the environment threads")?;
+        let mut env = Self {
+            obs_size: task.observation.size(),
+            loggers: (0..envs).map(|_| None).collect(),
+            tasks: Vec::new(),
+            terrain: terrain.clone(),
+            model: model.clone(),
+            task_config: task.clone(),
+            terrain_seed: seed,
+            pool,
+            interrupted,
+        };
+        env.tasks = env.build_tasks(envs)?;
+        Ok(env)
+    }
+
+    /// Fresh tasks for environments `0..envs`, built in parallel.
+    fn build_tasks(&self, envs: usize) -> Result<Vec<Task>> {
+        let (terrain, model, config, seed) = (
+            &self.terrain,
+            &self.model,
+            &self.task_config,
+            self.terrain_seed,
+        );
+        self.pool.install(|| {
+            (0..envs)
+                .into_par_iter()
+                .map(|i| {
+                    let world = make_world(
+                        terrain,
+                        model.clone(),
+                        derive_seed(seed, i as u64),
+                        [0.0, 0.0],
+                    )?;
+                    Ok(Task::new(world, config.clone(), 0))
+                })
+                .collect()
+        })
+    }
+
+    /// Streams environment `env` to `logger` (its terrain is logged now).
+    pub fn attach_logger(&mut self, env: usize, mut logger: RolloutLogger) {
+        logger.log_terrain(self.tasks[env].world().terrain());
+        self.loggers[env] = Some(EnvLogger {
+            env,
+            logger,
+            secs: 0.0,
+        });
+    }
+
+    /// Takes the loggers back (to move them to the next curriculum stage).
+    pub fn detach_loggers(&mut self) -> Vec<EnvLogger> {
+        self.loggers.iter_mut().filter_map(Option::take).collect()
+    }
+
+    /// The loggers.
+    pub fn loggers_mut(&mut self) -> impl Iterator<Item = &mut EnvLogger> {
+        self.loggers.iter_mut().flatten()
+    }
+
+    /// Seconds spent logging since the last call, summed over environments.
+    pub fn take_logging_secs(&mut self) -> f64 {
+        self.loggers_mut()
+            .map(|l| std::mem::take(&mut l.secs))
+            .fold(0.0, |a, b| a + b)
+    }
+}
+
+impl VecEnv for TaskEnv {
+    fn num_envs(&self) -> usize {
+        self.tasks.len()
+    }
+
+    fn observation_size(&self) -> usize {
+        self.obs_size
+    }
+
+    fn action_size(&self) -> usize {
+        ACTION_SIZE
+    }
+
+    fn reward_term_names(&self) -> Vec<String> {
+        RewardTerms::NAMES.iter().map(ToString::to_string).collect()
+    }
+
+    fn episode_metric_names(&self) -> Vec<String> {
+        EPISODE_METRICS.iter().map(ToString::to_string).collect()
+    }
+
+    fn reset_all(&mut self, seed: u64, obs: &mut [f32]) {
+        let o = self.obs_size;
+        self.tasks = self
+            .build_tasks(self.tasks.len())
+            .expect("worlds that were built once build again");
+        self.pool.install(|| {
+            self.tasks
+                .par_iter_mut()
+                .zip(obs.par_chunks_mut(o))
+                .zip(self.loggers.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, ((task, row), logger))| {
+                    task.set_seed(derive_seed(seed, i as u64));
+                    task.reset(row);
+                    if let Some(l) = logger {
+                        l.log_reset(task);
+                    }
+                });
+        });
+    }
+
+    /// Steps every task one phase. After Ctrl-C no physics runs: the step
+    /// returns zeros at once and the trainer discards the iteration.
+    fn step(&mut self, actions: &[f32], out: &mut StepResult) {
+        let o = self.obs_size;
+        let t = RewardTerms::NAMES.len();
+        let m = EPISODE_METRICS.len();
+        if self.interrupted.load(Ordering::Relaxed) {
+            out.rewards.fill(0.0);
+            out.truncated.fill(true);
+            out.terminated.fill(false);
+            out.final_obs.fill(0.0);
+            out.reward_terms.fill(0.0);
+            out.episode_metrics.fill(0.0);
+            return;
+        }
+        let StepResult {
+            obs,
+            rewards,
+            terminated,
+            truncated,
+            final_obs,
+            reward_terms,
+            episode_metrics,
+        } = out;
+        self.pool.install(|| {
+            self.tasks
+                .par_iter_mut()
+                .zip(self.loggers.par_iter_mut())
+                .zip(actions.par_chunks(ACTION_SIZE))
+                .zip(obs.par_chunks_mut(o))
+                .zip(final_obs.par_chunks_mut(o))
+                .zip(reward_terms.par_chunks_mut(t))
+                .zip(episode_metrics.par_chunks_mut(m))
+                .zip(rewards.par_iter_mut())
+                .zip(terminated.par_iter_mut())
+                .zip(truncated.par_iter_mut())
+                .for_each(
+                    |(
+                        (
+                            (
+                                (
+                                    (((((task, logger), action), obs_row), final_row), terms),
+                                    metrics,
+                                ),
+                                reward,
+                            ),
+                            term,
+                        ),
+                        trunc,
+                    )| {
+                        let outcome = match logger {
+                            Some(l) => task.step_phase_observed(action, obs_row, &mut Timed(l)),
+                            None => task.step_phase_observed(action, obs_row, &mut NoObserver),
+                        };
+                        *reward = outcome.reward as f32;
+                        for (slot, value) in terms.iter_mut().zip(outcome.terms.values()) {
+                            *slot = value as f32;
+                        }
+                        *term = outcome.termination.is_some();
+                        *trunc = outcome.truncated && !*term;
+                        if *term || *trunc {
+                            final_row.copy_from_slice(obs_row);
+                            let base_x_m = task.world().base_pose().translation.vector.x;
+                            metrics[0] = (base_x_m - task.start_xy_m()[0]) as f32;
+                            metrics[1] = task.goals_reached() as f32;
+                            task.reset(obs_row);
+                            if let Some(l) = logger {
+                                l.log_reset(task);
+                            }
+                        }
+                    },
+                );
+        });
+    }
+}

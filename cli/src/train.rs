@@ -1,0 +1,559 @@
+//! `quadwalk train`: PPO on N parallel worlds, a progress line per
+//! iteration, `metrics.jsonl`, atomic checkpoints (every N iterations, at
+//! the end and on Ctrl-C), `--resume`, curriculum stages, and the rollouts
+//! of chosen environments streamed to Rerun with the training curves.
+//!
+//! A run directory holds:
+//!
+//! | path | content |
+//! | --- | --- |
+//! | `config.toml` | the resolved experiment (every setting spelt out) |
+//! | `metrics.jsonl` | one JSON object per iteration (the statistics of `learn::IterationStats`) |
+//! | `checkpoints/iter-NNNNNN/` | `weights.safetensors`, `state.toml`, `config.toml` |
+//! | `latest` | link to the newest checkpoint |
+
+use std::fs;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use learn::checkpoint::{
+    point_latest, remove_partial_saves, resolve_checkpoint, write_dir_atomically,
+};
+use learn::{IterationStats, Trainer};
+use serde_json::json;
+use viz::RerunSink;
+
+use crate::commands::SceneArgs;
+use crate::config::Experiment;
+use crate::task_env::TaskEnv;
+use crate::viz_args::{RerunArgs, print_warnings};
+
+/// The resolved experiment's file name, in run and checkpoint directories.
+pub const CONFIG_FILE: &str = "config.toml";
+/// One JSON object per iteration.
+pub const METRICS_FILE: &str = "metrics.jsonl";
+
+/// Arguments of `quadwalk train`.
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Parallel environments [default: 16, or the config's train.envs]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=4096), conflicts_with = "resume")]
+    envs: Option<u64>,
+    /// Iterations in all (with --resume: the new total) [default: 100, or the config's]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    iterations: Option<u64>,
+    /// Seed of the run: networks, sampling, start positions, terrain draws [default: 0]
+    #[arg(long, conflicts_with = "resume")]
+    seed: Option<u64>,
+    /// Run directory [default: runs/<terrain>-seed<seed>-<UTC date>-<time>]
+    #[arg(long, conflicts_with = "resume")]
+    run_dir: Option<PathBuf>,
+    /// Continue a run: its directory, or one of its checkpoints
+    #[arg(long, value_name = "DIR")]
+    resume: Option<PathBuf>,
+    /// Threads stepping the worlds [default: all cores]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    threads: Option<u64>,
+    /// Iterations between checkpoints [default: 10, or the config's]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    checkpoint_every: Option<u64>,
+    /// Environments whose rollouts are streamed, e.g. 0,3 [default: 0]
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    rerun_envs: Option<Vec<usize>>,
+    /// Print each iteration's statistics as one JSON line on stdout
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    rerun: RerunArgs,
+}
+
+/// Everything a run needs, resolved from flags, config file or checkpoint.
+struct Plan {
+    experiment: Experiment,
+    run_dir: PathBuf,
+    trainer: Trainer,
+    threads: usize,
+}
+
+/// `runs/<terrain>-seed<seed>-<UTC date>-<time>`: a new directory per run.
+fn default_run_dir(experiment: &Experiment) -> PathBuf {
+    let terrain = experiment.terrain.to_string();
+    let name: String = terrain
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let base = format!("{name}-seed{}-{}", experiment.train.seed, utc_stamp(secs));
+    let mut dir = PathBuf::from("runs").join(&base);
+    let mut k = 2;
+    while dir.exists() {
+        dir = PathBuf::from("runs").join(format!("{base}-{k}"));
+        k += 1;
+    }
+    dir
+}
+
+/// `YYYYMMDD-HHMMSS` (UTC) of a Unix time (Hinnant's civil-from-days).
+fn utc_stamp(unix_secs: u64) -> String {
+    let days = (unix_secs / 86_400) as i64;
+    let rem = unix_secs % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}{month:02}{day:02}-{:02}{:02}{:02}",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+fn plan(args: &TrainArgs) -> Result<Plan> {
+    let threads = match args.threads {
+        Some(t) => t as usize,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    if let Some(resume) = &args.resume {
+        if args.scene.is_given() {
+            bail!(
+                "--resume continues the run with its own config.toml; --terrain and --config cannot be given with it"
+            );
+        }
+        let checkpoint =
+            resolve_checkpoint(resume).with_context(|| format!("--resume {}", resume.display()))?;
+        let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
+        let mut experiment = Experiment::from_file(&checkpoint.join(CONFIG_FILE))?;
+        let trainer =
+            Trainer::load(&checkpoint).with_context(|| format!("--resume {}", resume.display()))?;
+        // checkpoints/iter-N -> the run directory two levels up
+        let run_dir = checkpoint
+            .parent()
+            .and_then(Path::parent)
+            .map(Path::to_path_buf)
+            .with_context(|| format!("{}: not inside a run directory", checkpoint.display()))?;
+        if let Some(n) = args.iterations {
+            if !experiment.curriculum.is_empty() {
+                bail!("--iterations cannot change a curriculum's length; edit its stages instead");
+            }
+            experiment.train.iterations = n;
+        }
+        apply_common(&mut experiment, args)?;
+        return Ok(Plan {
+            experiment,
+            run_dir,
+            trainer,
+            threads,
+        });
+    }
+    let mut experiment = args.scene.experiment()?;
+    if let Some(envs) = args.envs {
+        experiment.train.envs = envs as usize;
+    }
+    if let Some(n) = args.iterations {
+        if !experiment.curriculum.is_empty() {
+            bail!("--iterations cannot change a curriculum's length; edit its stages instead");
+        }
+        experiment.train.iterations = n;
+    }
+    if let Some(seed) = args.seed {
+        experiment.train.seed = seed;
+    }
+    apply_common(&mut experiment, args)?;
+    let run_dir = args
+        .run_dir
+        .clone()
+        .unwrap_or_else(|| default_run_dir(&experiment));
+    if run_dir.join(learn::checkpoint::LATEST_LINK).exists() || run_dir.join(METRICS_FILE).exists()
+    {
+        bail!(
+            "run directory {} already holds a run: continue it with --resume {0}, or choose another --run-dir",
+            run_dir.display()
+        );
+    }
+    let model = args.scene.robot()?;
+    if model.joints.len() != 12 {
+        bail!(
+            "the robot has {} joints; training needs a 12-DoF quadruped",
+            model.joints.len()
+        );
+    }
+    let trainer = Trainer::new(
+        experiment.ppo.clone(),
+        experiment.task.observation.size(),
+        robot::action::ACTION_SIZE,
+        experiment.train.seed,
+    )?;
+    Ok(Plan {
+        experiment,
+        run_dir,
+        trainer,
+        threads,
+    })
+}
+
+/// Flags that may change on a resume as on a fresh run.
+fn apply_common(experiment: &mut Experiment, args: &TrainArgs) -> Result<()> {
+    if let Some(every) = args.checkpoint_every {
+        experiment.train.checkpoint_every = every;
+    }
+    if let Some(envs) = &args.rerun_envs {
+        experiment.train.rerun_envs = envs.clone();
+    }
+    experiment.train.validate().context("flags")?;
+    Ok(())
+}
+
+/// Where env `env`'s stream goes: `save:PATH` gives env 0 PATH and env k
+/// `PATH` with `-envK` before the extension.
+fn sink_for_env(sink: &RerunSink, env: usize, first: bool) -> RerunSink {
+    match sink {
+        RerunSink::Save(Some(path)) if !first => {
+            let stem = path
+                .file_stem()
+                .map_or("run".into(), |s| s.to_string_lossy().to_string());
+            let ext = path
+                .extension()
+                .map_or("rrd".into(), |s| s.to_string_lossy().to_string());
+            RerunSink::Save(Some(path.with_file_name(format!("{stem}-env{env}.{ext}"))))
+        }
+        other => other.clone(),
+    }
+}
+
+/// `quadwalk train`.
+pub fn train(args: &TrainArgs) -> Result<()> {
+    let Plan {
+        experiment,
+        run_dir,
+        mut trainer,
+        threads,
+    } = plan(args)?;
+    let total = experiment.total_iterations();
+    let start_iteration = trainer.iteration;
+    if start_iteration >= total {
+        bail!(
+            "the run in {} has done {start_iteration} of {total} iterations already; pass a larger --iterations to go on",
+            run_dir.display()
+        );
+    }
+    fs::create_dir_all(run_dir.join("checkpoints"))
+        .with_context(|| format!("cannot create the run directory {}", run_dir.display()))?;
+    remove_partial_saves(&run_dir);
+    remove_partial_saves(&run_dir.join("checkpoints"));
+    let config_text = experiment.to_toml();
+    write_atomically(&run_dir.join(CONFIG_FILE), config_text.as_bytes())?;
+    let metrics_path = run_dir.join(METRICS_FILE);
+    keep_metrics_up_to(&metrics_path, start_iteration)?;
+
+    let interrupted = Arc::new(AtomicBool::new(false));
+    {
+        let flag = interrupted.clone();
+        ctrlc::set_handler(move || {
+            if flag.swap(true, Ordering::SeqCst) {
+                eprintln!("\nsecond Ctrl-C: stopping now; the last checkpoint stands");
+                std::process::exit(130);
+            }
+            eprintln!("\nCtrl-C: writing a checkpoint and stopping (Ctrl-C again to stop at once)");
+        })
+        .context("cannot install the Ctrl-C handler")?;
+    }
+
+    let model = args.scene.robot()?;
+    let build_env = |terrain| {
+        TaskEnv::new(
+            terrain,
+            &model,
+            &experiment.task,
+            experiment.train.envs,
+            experiment.train.seed,
+            threads,
+            interrupted.clone(),
+        )
+    };
+    let mut stage = experiment.terrain_at(start_iteration).0;
+    let mut env = build_env(experiment.terrain_at(start_iteration).1)?;
+    let sink = args.rerun.sink(RerunSink::Spawn);
+    for (k, &e) in experiment.train.rerun_envs.iter().enumerate() {
+        let logger = args.rerun.open_sink(
+            sink_for_env(&sink, e, k == 0),
+            &model,
+            Path::new("quadwalk-train.rrd"),
+            &format!("train env {e} ({})", run_dir.display()),
+        )?;
+        if logger.is_active() {
+            env.attach_logger(e, logger);
+        }
+    }
+
+    eprintln!(
+        "training on {} with {} environments x {} phases per iteration, {threads} threads; run directory {}",
+        experiment.terrain_at(start_iteration).1,
+        experiment.train.envs,
+        experiment.ppo.steps_per_env,
+        run_dir.display()
+    );
+    let started = Instant::now();
+    let mut phases_done = 0usize;
+    for iteration in start_iteration..total {
+        let (next_stage, terrain) = experiment.terrain_at(iteration);
+        if next_stage != stage {
+            let loggers = env.detach_loggers();
+            env = build_env(terrain)?;
+            for l in loggers {
+                env.attach_logger(l.env, l.logger);
+            }
+            stage = next_stage;
+            eprintln!("curriculum stage {}: {terrain}", stage + 1);
+        }
+        for l in env.loggers_mut() {
+            l.logger.set_iteration(Some(iteration as i64));
+        }
+        // the state before this iteration, written if Ctrl-C cuts it short
+        let before = trainer.checkpoint_files()?;
+        let stats = trainer.iterate(&mut env)?;
+        if interrupted.load(Ordering::SeqCst) {
+            save_checkpoint(
+                &run_dir,
+                iteration,
+                before,
+                &config_text,
+                experiment.train.keep_checkpoints,
+            )?;
+            finish_loggers(&mut env);
+            eprintln!(
+                "stopped by Ctrl-C during iteration {}; checkpoint of iteration {iteration} in {}",
+                iteration + 1,
+                run_dir.join(learn::checkpoint::LATEST_LINK).display()
+            );
+            std::process::exit(130);
+        }
+        let logging_secs = env.take_logging_secs();
+        phases_done += stats.steps;
+        let record = metrics_record(&stats, terrain, logging_secs);
+        append_line(&metrics_path, &record.to_string())?;
+        if args.json {
+            out!("{record}");
+        }
+        let curves: Vec<(String, f64)> = [
+            ("mean_return", stats.mean_episode_return),
+            ("mean_distance_m", metric(&stats, "distance_m")),
+            ("mean_episode_length", stats.mean_episode_length),
+            ("policy_loss", Some(stats.policy_loss)),
+            ("value_loss", Some(stats.value_loss)),
+            ("entropy", Some(stats.entropy)),
+            ("approx_kl", Some(stats.approx_kl)),
+            ("clip_fraction", Some(stats.clip_fraction)),
+            ("explained_variance", Some(stats.explained_variance)),
+            ("phases_per_s", Some(stats.steps_per_sec)),
+        ]
+        .into_iter()
+        .filter_map(|(n, v)| v.map(|v| (n.to_string(), v)))
+        .collect();
+        for l in env.loggers_mut() {
+            l.logger.log_training(stats.iteration as i64, &curves);
+            print_warnings(&mut l.logger);
+        }
+        progress(&stats, total, started.elapsed().as_secs_f64(), phases_done);
+        let done = stats.iteration;
+        if done % experiment.train.checkpoint_every == 0 || done == total {
+            save_checkpoint(
+                &run_dir,
+                done,
+                trainer.checkpoint_files()?,
+                &config_text,
+                experiment.train.keep_checkpoints,
+            )?;
+        }
+    }
+    finish_loggers(&mut env);
+    eprintln!(
+        "done: {total} iterations; checkpoint {}",
+        run_dir.join(learn::checkpoint::LATEST_LINK).display()
+    );
+    Ok(())
+}
+
+fn finish_loggers(env: &mut TaskEnv) {
+    for l in env.loggers_mut() {
+        l.logger.finish();
+        print_warnings(&mut l.logger);
+    }
+}
+
+fn metric(stats: &IterationStats, name: &str) -> Option<f64> {
+    stats
+        .episode_metrics
+        .iter()
+        .find(|(n, _)| n == name)
+        .and_then(|(_, v)| *v)
+}
+
+/// The JSON line of one iteration.
+fn metrics_record(
+    stats: &IterationStats,
+    terrain: &terrain_plugins::TerrainSpec,
+    logging_secs: f64,
+) -> serde_json::Value {
+    let terms: serde_json::Map<String, serde_json::Value> = stats
+        .reward_terms
+        .iter()
+        .map(|(n, v)| (n.clone(), json!(v)))
+        .collect();
+    json!({
+        "iteration": stats.iteration,
+        "terrain": terrain.to_string(),
+        "phases": stats.steps,
+        "episodes": stats.episodes,
+        "terminated": stats.terminated,
+        "mean_return": stats.mean_episode_return,
+        "mean_episode_length": stats.mean_episode_length,
+        "mean_distance_m": metric(stats, "distance_m"),
+        "mean_goals_reached": metric(stats, "goals_reached"),
+        "mean_phase_reward": stats.mean_step_reward,
+        "reward_terms": terms,
+        "policy_loss": stats.policy_loss,
+        "value_loss": stats.value_loss,
+        "entropy": stats.entropy,
+        "approx_kl": stats.approx_kl,
+        "clip_fraction": stats.clip_fraction,
+        "explained_variance": stats.explained_variance,
+        "grad_norm_actor": stats.grad_norm.0,
+        "grad_norm_critic": stats.grad_norm.1,
+        "action_std": stats.action_std,
+        "epochs": stats.epochs,
+        "phases_per_s": stats.steps_per_sec,
+        "secs": {
+            "env": stats.env_secs - logging_secs,
+            "logging": logging_secs,
+            "inference": stats.inference_secs,
+            "update": stats.update_secs,
+        },
+    })
+}
+
+/// One progress line per iteration on stderr.
+fn progress(stats: &IterationStats, total: u64, elapsed_secs: f64, phases_done: usize) {
+    let width = 20;
+    let filled = (stats.iteration as usize * width / total.max(1) as usize).min(width);
+    let bar: String = "#".repeat(filled) + &".".repeat(width - filled);
+    let fmt = |v: Option<f64>, unit: &str| v.map_or("-".to_string(), |v| format!("{v:.2}{unit}"));
+    let rate = phases_done as f64 / elapsed_secs.max(1e-9);
+    eprintln!(
+        "[{bar}] iter {}/{total} | {:.1} phases/s | return {} | distance {} | length {} | kl {:.4} | ev {:.2}",
+        stats.iteration,
+        rate,
+        fmt(stats.mean_episode_return, ""),
+        fmt(metric(stats, "distance_m"), " m"),
+        fmt(stats.mean_episode_length, ""),
+        stats.approx_kl,
+        stats.explained_variance,
+    );
+}
+
+/// Writes the checkpoint of `iteration`, points `latest` at it, prunes old ones.
+fn save_checkpoint(
+    run_dir: &Path,
+    iteration: u64,
+    mut files: Vec<(String, Vec<u8>)>,
+    config_text: &str,
+    keep: usize,
+) -> Result<()> {
+    let name = format!("iter-{iteration:06}");
+    files.push((CONFIG_FILE.to_string(), config_text.as_bytes().to_vec()));
+    let dir = run_dir.join("checkpoints").join(&name);
+    write_dir_atomically(&dir, &files)?;
+    point_latest(run_dir, &Path::new("checkpoints").join(&name))?;
+    // keep the newest `keep`
+    let mut names: Vec<String> = fs::read_dir(run_dir.join("checkpoints"))
+        .map(|entries| {
+            entries
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().to_string())
+                .filter(|n| n.starts_with("iter-"))
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    if names.len() > keep {
+        for old in &names[..names.len() - keep] {
+            let _ = fs::remove_dir_all(run_dir.join("checkpoints").join(old));
+        }
+    }
+    Ok(())
+}
+
+/// Writes a file by writing a sibling and renaming it over.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = path.with_extension(format!("partial-{}", std::process::id()));
+    let mut f =
+        fs::File::create(&tmp).with_context(|| format!("cannot write {}", tmp.display()))?;
+    f.write_all(bytes)
+        .with_context(|| format!("cannot write {}", tmp.display()))?;
+    f.sync_all()
+        .with_context(|| format!("cannot write {}", tmp.display()))?;
+    fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}
+
+fn append_line(path: &Path, line: &str) -> Result<()> {
+    let mut f = fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .with_context(|| format!("cannot append to {}", path.display()))?;
+    writeln!(f, "{line}").with_context(|| format!("cannot append to {}", path.display()))?;
+    Ok(())
+}
+
+/// On resume: drops the lines of iterations after the checkpoint.
+fn keep_metrics_up_to(path: &Path, iteration: u64) -> Result<()> {
+    let Ok(text) = fs::read_to_string(path) else {
+        return Ok(());
+    };
+    let kept: String = text
+        .lines()
+        .filter(|line| {
+            serde_json::from_str::<serde_json::Value>(line)
+                .ok()
+                .and_then(|v| v["iteration"].as_u64())
+                .is_some_and(|i| i <= iteration)
+        })
+        .map(|line| format!("{line}\n"))
+        .collect();
+    write_atomically(path, kept.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_stamps() {
+        assert_eq!(utc_stamp(0), "19700101-000000");
+        // 2026-11-22 08:47:05 UTC
+        assert_eq!(utc_stamp(1_795_337_225), "20261122-084705");
+        // a leap day
+        assert_eq!(utc_stamp(951_782_400), "20000229-000000");
+    }
+}

@@ -1,0 +1,520 @@
+//! Checkpoints: a directory holding
+//!
+//! | file | content |
+//! | --- | --- |
+//! | `weights.safetensors` | the policy (`actor.K.weight/bias`, `log_std`, `critic.K.weight/bias`), the normaliser (`obs_norm.mean`, `obs_norm.var`, f64) and Adam's moments (`adam.m.NAME`, `adam.v.NAME`) |
+//! | `state.toml` | format version, iteration, seed, sizes, Adam step, normaliser count, the sampling RNG's position, the PPO settings, and the FNV-1a 64 checksum of `weights.safetensors` |
+//! | anything the caller adds | (the CLI adds `config.toml`, the resolved experiment) |
+//!
+//! Writing is atomic: the files go into a hidden sibling directory, are
+//! flushed to disk, and the directory is renamed into place in one step; a
+//! process killed during a save leaves at most a stray hidden directory,
+//! never a half-written checkpoint. The run directory's `latest` is a
+//! symbolic link replaced by rename, so it always names a complete one.
+//! Loading checks the checksum, every tensor's presence and shape, and
+//! every value's range, and says which file and which entry is wrong.
+
+use std::collections::HashMap;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use candle_core::{DType, Device, Tensor, Var};
+use safetensors::SafeTensors;
+use serde::{Deserialize, Serialize};
+
+use crate::LearnError;
+use crate::config::PpoConfig;
+use crate::normalizer::ObsNormalizer;
+use crate::optim::Adam;
+use crate::trainer::{RngState, Trainer};
+
+/// The weights file's name.
+pub const WEIGHTS_FILE: &str = "weights.safetensors";
+/// The state file's name.
+pub const STATE_FILE: &str = "state.toml";
+/// The link to the newest checkpoint inside a run directory.
+pub const LATEST_LINK: &str = "latest";
+/// Version of the layout above.
+pub const FORMAT_VERSION: u32 = 1;
+/// Test hook: when set to a number of milliseconds, a save sleeps that long
+/// after writing its first file (so that a test can kill the process in the
+/// middle of a save).
+pub const SAVE_PAUSE_ENV: &str = "QUADWALK_TEST_SAVE_PAUSE_MS";
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StateFile {
+    format: u32,
+    iteration: u64,
+    seed: u64,
+    obs_size: usize,
+    action_size: usize,
+    adam_step: u64,
+    normalizer_count: f64,
+    rng_seed_hex: String,
+    rng_stream: u64,
+    rng_word_pos: String,
+    weights_fnv1a64: String,
+    ppo: PpoConfig,
+}
+
+/// FNV-1a, 64 bit.
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for &b in bytes {
+        hash ^= u64::from(b);
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+    }
+    hash
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn unhex32(text: &str) -> Option<[u8; 32]> {
+    if text.len() != 64 {
+        return None;
+    }
+    let mut out = [0u8; 32];
+    for (k, byte) in out.iter_mut().enumerate() {
+        *byte = u8::from_str_radix(text.get(2 * k..2 * k + 2)?, 16).ok()?;
+    }
+    Some(out)
+}
+
+impl Trainer {
+    /// The checkpoint's files (name, bytes), ready for [`write_dir_atomically`].
+    pub fn checkpoint_files(&self) -> Result<Vec<(String, Vec<u8>)>, LearnError> {
+        let mut tensors: Vec<(String, Tensor)> = Vec::new();
+        for (name, var) in self.policy.named_vars() {
+            tensors.push((name, var.as_tensor().clone()));
+        }
+        let device = Device::Cpu;
+        tensors.push((
+            "obs_norm.mean".into(),
+            Tensor::from_slice(&self.normalizer.mean, self.normalizer.size(), &device)?,
+        ));
+        tensors.push((
+            "obs_norm.var".into(),
+            Tensor::from_slice(&self.normalizer.var, self.normalizer.size(), &device)?,
+        ));
+        for (k, (name, _)) in self.adam.vars().iter().enumerate() {
+            tensors.push((format!("adam.m.{name}"), self.adam.m[k].clone()));
+            tensors.push((format!("adam.v.{name}"), self.adam.v[k].clone()));
+        }
+        let weights = safetensors::serialize(tensors, None)
+            .map_err(|e| LearnError::Checkpoint(format!("cannot serialise the weights: {e}")))?;
+        let rng = self.rng_state();
+        let state = StateFile {
+            format: FORMAT_VERSION,
+            iteration: self.iteration,
+            seed: self.seed,
+            obs_size: self.policy.obs_size(),
+            action_size: self.policy.action_size(),
+            adam_step: self.adam.step,
+            normalizer_count: self.normalizer.count,
+            rng_seed_hex: hex(&rng.seed),
+            rng_stream: rng.stream,
+            rng_word_pos: rng.word_pos.to_string(),
+            weights_fnv1a64: format!("{:016x}", fnv1a64(&weights)),
+            ppo: self.config.clone(),
+        };
+        let state = toml::to_string(&state)
+            .map_err(|e| LearnError::Checkpoint(format!("cannot serialise the state: {e}")))?;
+        Ok(vec![
+            (WEIGHTS_FILE.into(), weights),
+            (STATE_FILE.into(), state.into_bytes()),
+        ])
+    }
+
+    /// Loads the checkpoint in `dir` (a checkpoint directory, or a run
+    /// directory or link whose `latest` names one).
+    pub fn load(dir: &Path) -> Result<Self, LearnError> {
+        let dir = resolve_checkpoint(dir)?;
+        let bad = |file: &str, what: String| {
+            LearnError::Checkpoint(format!("{}: {what}", dir.join(file).display()))
+        };
+        let state_text = fs::read_to_string(dir.join(STATE_FILE))
+            .map_err(|e| bad(STATE_FILE, format!("cannot read it: {e}")))?;
+        let state: StateFile = toml::from_str(&state_text).map_err(|e| {
+            bad(
+                STATE_FILE,
+                format!("not a valid state file: {}", e.message()),
+            )
+        })?;
+        if state.format != FORMAT_VERSION {
+            return Err(bad(
+                STATE_FILE,
+                format!(
+                    "format {} is not the supported {FORMAT_VERSION}",
+                    state.format
+                ),
+            ));
+        }
+        state
+            .ppo
+            .validate()
+            .map_err(|e| bad(STATE_FILE, e.to_string()))?;
+        let weights = fs::read(dir.join(WEIGHTS_FILE))
+            .map_err(|e| bad(WEIGHTS_FILE, format!("cannot read it: {e}")))?;
+        let checksum = format!("{:016x}", fnv1a64(&weights));
+        if checksum != state.weights_fnv1a64 {
+            return Err(bad(
+                WEIGHTS_FILE,
+                format!(
+                    "checksum {checksum} differs from {} recorded in {STATE_FILE}: the file is damaged or truncated",
+                    state.weights_fnv1a64
+                ),
+            ));
+        }
+        let tensors = SafeTensors::deserialize(&weights)
+            .map_err(|e| bad(WEIGHTS_FILE, format!("not a safetensors file: {e}")))?;
+        let device = Device::Cpu;
+        let get = |name: &str, shape: &[usize], dtype: DType| -> Result<Tensor, LearnError> {
+            let view = tensors
+                .tensor(name)
+                .map_err(|_| bad(WEIGHTS_FILE, format!("tensor {name:?} is missing")))?;
+            if view.shape() != shape {
+                return Err(bad(
+                    WEIGHTS_FILE,
+                    format!(
+                        "tensor {name:?} has shape {:?}, the configuration needs {shape:?}",
+                        view.shape()
+                    ),
+                ));
+            }
+            let tensor = candle_core::safetensors::Load::load(&view, &device)?;
+            if tensor.dtype() != dtype {
+                return Err(bad(
+                    WEIGHTS_FILE,
+                    format!(
+                        "tensor {name:?} is {:?}, expected {dtype:?}",
+                        tensor.dtype()
+                    ),
+                ));
+            }
+            Ok(tensor)
+        };
+        let seed = unhex32(&state.rng_seed_hex)
+            .ok_or_else(|| bad(STATE_FILE, "rng_seed_hex is not 64 hex digits".into()))?;
+        let word_pos: u128 = state.rng_word_pos.parse().map_err(|_| {
+            bad(
+                STATE_FILE,
+                format!("rng_word_pos {:?} is not a number", state.rng_word_pos),
+            )
+        })?;
+
+        // fresh networks of the recorded shape, then every value replaced
+        let mut trainer = Trainer::new(
+            state.ppo.clone(),
+            state.obs_size,
+            state.action_size,
+            state.seed,
+        )?;
+        let finite = |name: &str, t: &Tensor| -> Result<(), LearnError> {
+            let values: Vec<f32> = t.flatten_all()?.to_vec1()?;
+            if values.iter().all(|v| v.is_finite()) {
+                Ok(())
+            } else {
+                Err(bad(
+                    WEIGHTS_FILE,
+                    format!("tensor {name:?} holds a non-finite value"),
+                ))
+            }
+        };
+        for (name, var) in trainer.policy.named_vars() {
+            let t = get(&name, var.as_tensor().dims(), DType::F32)?;
+            finite(&name, &t)?;
+            var.set(&t)?;
+        }
+        let size = state.obs_size;
+        let mean: Vec<f64> = get("obs_norm.mean", &[size], DType::F64)?.to_vec1()?;
+        let var: Vec<f64> = get("obs_norm.var", &[size], DType::F64)?.to_vec1()?;
+        let normalizer =
+            ObsNormalizer::from_parts(mean, var, state.normalizer_count, state.ppo.obs_clip)
+                .map_err(|e| bad(WEIGHTS_FILE, e.to_string()))?;
+        let mut adam = Adam::new(trainer.policy.named_vars(), state.ppo.learning_rate)?;
+        adam.step = state.adam_step;
+        let names: Vec<(String, Var)> = adam.vars().to_vec();
+        for (k, (name, var)) in names.iter().enumerate() {
+            let m = get(
+                &format!("adam.m.{name}"),
+                var.as_tensor().dims(),
+                DType::F32,
+            )?;
+            let v = get(
+                &format!("adam.v.{name}"),
+                var.as_tensor().dims(),
+                DType::F32,
+            )?;
+            finite(name, &m)?;
+            finite(name, &v)?;
+            adam.m[k] = m;
+            adam.v[k] = v;
+        }
+        trainer = Trainer::from_parts(
+            state.ppo,
+            trainer.policy,
+            adam,
+            normalizer,
+            state.seed,
+            state.iteration,
+            RngState {
+                seed,
+                stream: state.rng_stream,
+                word_pos,
+            },
+        );
+        Ok(trainer)
+    }
+}
+
+/// The checkpoint directory that `path` means: itself when it holds a
+/// state file, else its `latest`.
+pub fn resolve_checkpoint(path: &Path) -> Result<PathBuf, LearnError> {
+    if path.join(STATE_FILE).is_file() {
+        return Ok(path.to_path_buf());
+    }
+    let latest = path.join(LATEST_LINK);
+    if latest.join(STATE_FILE).is_file() {
+        return Ok(latest);
+    }
+    if !path.exists() {
+        return Err(LearnError::Checkpoint(format!(
+            "{}: no such file or directory",
+            path.display()
+        )));
+    }
+    Err(LearnError::Checkpoint(format!(
+        "{}: not a checkpoint (no {STATE_FILE}) nor a run directory with a `{LATEST_LINK}` checkpoint",
+        path.display()
+    )))
+}
+
+/// Writes `files` into directory `target` atomically (see the module docs).
+/// A `target` that already exists is left as it is (checkpoints are named
+/// by iteration, so it holds the same content).
+pub fn write_dir_atomically(target: &Path, files: &[(String, Vec<u8>)]) -> Result<(), LearnError> {
+    let io = |what: &str, path: &Path, e: std::io::Error| {
+        LearnError::Checkpoint(format!("{}: cannot {what}: {e}", path.display()))
+    };
+    if target.join(STATE_FILE).is_file() {
+        return Ok(());
+    }
+    let parent = target
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = target.file_name().ok_or_else(|| {
+        LearnError::Checkpoint(format!("{}: not a directory name", target.display()))
+    })?;
+    fs::create_dir_all(parent).map_err(|e| io("create the directory", parent, e))?;
+    let staging = parent.join(format!(
+        ".{}.partial-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    if staging.exists() {
+        fs::remove_dir_all(&staging).map_err(|e| io("remove", &staging, e))?;
+    }
+    fs::create_dir(&staging).map_err(|e| io("create", &staging, e))?;
+    let pause_ms: Option<u64> = std::env::var(SAVE_PAUSE_ENV)
+        .ok()
+        .and_then(|v| v.parse().ok());
+    for (k, (file, bytes)) in files.iter().enumerate() {
+        let path = staging.join(file);
+        let mut f = fs::File::create(&path).map_err(|e| io("create", &path, e))?;
+        f.write_all(bytes).map_err(|e| io("write", &path, e))?;
+        f.sync_all().map_err(|e| io("flush", &path, e))?;
+        if k == 0
+            && let Some(ms) = pause_ms
+        {
+            std::thread::sleep(std::time::Duration::from_millis(ms));
+        }
+    }
+    sync_dir(&staging);
+    if target.exists() {
+        // an incomplete directory of that name (not ours): replace it
+        fs::remove_dir_all(target).map_err(|e| io("remove", target, e))?;
+    }
+    fs::rename(&staging, target)
+        .map_err(|e| io("move the new checkpoint into place at", target, e))?;
+    sync_dir(parent);
+    Ok(())
+}
+
+/// Points `run_dir/latest` at `checkpoint` (a path relative to `run_dir`),
+/// atomically.
+pub fn point_latest(run_dir: &Path, checkpoint: &Path) -> Result<(), LearnError> {
+    let link = run_dir.join(LATEST_LINK);
+    let staging = run_dir.join(format!(".{LATEST_LINK}.partial-{}", std::process::id()));
+    let _ = fs::remove_file(&staging);
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(checkpoint, &staging).map_err(|e| {
+        LearnError::Checkpoint(format!(
+            "{}: cannot create the link: {e}",
+            staging.display()
+        ))
+    })?;
+    #[cfg(not(unix))]
+    return Err(LearnError::Checkpoint(format!(
+        "{}: the `latest` link needs a Unix file system",
+        link.display()
+    )));
+    #[cfg(unix)]
+    {
+        fs::rename(&staging, &link).map_err(|e| {
+            LearnError::Checkpoint(format!("{}: cannot replace the link: {e}", link.display()))
+        })?;
+        sync_dir(run_dir);
+        Ok(())
+    }
+}
+
+/// Removes the stray staging directories a killed save may have left.
+pub fn remove_partial_saves(dir: &Path) {
+    if let Ok(entries) = fs::read_dir(dir) {
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().to_string();
+            if name.starts_with('.') && name.contains(".partial-") {
+                let path = entry.path();
+                let _ = if path.is_dir() {
+                    fs::remove_dir_all(&path)
+                } else {
+                    fs::remove_file(&path)
+                };
+            }
+        }
+    }
+}
+
+fn sync_dir(dir: &Path) {
+    // Best effort: some file systems refuse to fsync a directory.
+    if let Ok(d) = fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+}
+
+/// The tensors of a safetensors file, by name (for tools and tests).
+pub fn read_tensors(path: &Path) -> Result<HashMap<String, Tensor>, LearnError> {
+    candle_core::safetensors::load(path, &Device::Cpu)
+        .map_err(|e| LearnError::Checkpoint(format!("{}: {e}", path.display())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trainer() -> Trainer {
+        let config = PpoConfig {
+            hidden_sizes: vec![8, 4],
+            ..PpoConfig::default()
+        };
+        let mut t = Trainer::new(config, 5, 2, 11).unwrap();
+        t.normalizer
+            .update(&[1.0, 2.0, 3.0, 4.0, 5.0, 0.0, 0.0, 1.0, 1.0, 2.0]);
+        t.adam.step = 7;
+        t.iteration = 3;
+        t
+    }
+
+    fn save(t: &Trainer, dir: &Path) {
+        write_dir_atomically(dir, &t.checkpoint_files().unwrap()).unwrap();
+    }
+
+    #[test]
+    fn save_then_load_restores_everything() {
+        let tmp = tempfile::tempdir().unwrap();
+        let t = trainer();
+        save(&t, &tmp.path().join("iter-3"));
+        point_latest(tmp.path(), Path::new("iter-3")).unwrap();
+        let back = Trainer::load(tmp.path()).unwrap();
+        assert_eq!(back.iteration, 3);
+        assert_eq!(back.adam.step, 7);
+        assert_eq!(back.normalizer, t.normalizer);
+        assert_eq!(back.rng_state(), t.rng_state());
+        assert_eq!(back.config, t.config);
+        for ((na, a), (nb, b)) in t.named_vars().iter().zip(back.named_vars().iter()) {
+            assert_eq!(na, nb);
+            let x: Vec<f32> = a.as_tensor().flatten_all().unwrap().to_vec1().unwrap();
+            let y: Vec<f32> = b.as_tensor().flatten_all().unwrap().to_vec1().unwrap();
+            assert_eq!(x, y, "{na}");
+        }
+        // saving the loaded trainer gives the same bytes
+        assert_eq!(
+            back.checkpoint_files().unwrap(),
+            t.checkpoint_files().unwrap()
+        );
+    }
+
+    #[test]
+    fn truncated_or_corrupt_weights_are_named() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("c");
+        save(&trainer(), &dir);
+        let path = dir.join(WEIGHTS_FILE);
+        let bytes = fs::read(&path).unwrap();
+        fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+        let err = Trainer::load(&dir).unwrap_err().to_string();
+        assert!(
+            err.contains(WEIGHTS_FILE) && err.contains("damaged or truncated"),
+            "{err}"
+        );
+        let mut flipped = bytes.clone();
+        let k = flipped.len() - 10;
+        flipped[k] ^= 0x40;
+        fs::write(&path, &flipped).unwrap();
+        let err = Trainer::load(&dir).unwrap_err().to_string();
+        assert!(err.contains("checksum"), "{err}");
+    }
+
+    #[test]
+    fn bad_state_files_are_named() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("c");
+        save(&trainer(), &dir);
+        let state = dir.join(STATE_FILE);
+        let text = fs::read_to_string(&state).unwrap();
+        fs::write(&state, &text[..text.len() / 3]).unwrap();
+        let err = Trainer::load(&dir).unwrap_err().to_string();
+        assert!(
+            err.contains(STATE_FILE) && err.contains("not a valid state file"),
+            "{err}"
+        );
+        // a state whose sizes do not match the weights: the tensor is named
+        let wrong = text.replace("obs_size = 5", "obs_size = 6");
+        fs::write(&state, wrong).unwrap();
+        let err = Trainer::load(&dir).unwrap_err().to_string();
+        assert!(
+            err.contains("actor.0.weight") && err.contains("shape"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn missing_paths_and_non_checkpoints_are_named() {
+        let tmp = tempfile::tempdir().unwrap();
+        let err = Trainer::load(&tmp.path().join("nope"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("nope") && err.contains("no such"), "{err}");
+        let err = Trainer::load(tmp.path()).unwrap_err().to_string();
+        assert!(err.contains("not a checkpoint"), "{err}");
+    }
+
+    #[test]
+    fn a_stray_partial_save_is_ignored_and_cleaned() {
+        let tmp = tempfile::tempdir().unwrap();
+        save(&trainer(), &tmp.path().join("iter-3"));
+        point_latest(tmp.path(), Path::new("iter-3")).unwrap();
+        let stray = tmp.path().join(".iter-4.partial-999");
+        fs::create_dir(&stray).unwrap();
+        fs::write(stray.join(WEIGHTS_FILE), b"half").unwrap();
+        assert_eq!(Trainer::load(tmp.path()).unwrap().iteration, 3);
+        remove_partial_saves(tmp.path());
+        assert!(!stray.exists());
+        assert!(tmp.path().join("iter-3").exists());
+    }
+}

@@ -1,0 +1,197 @@
+//! PPO settings. The paper's values are the defaults where it gives them
+//! (actor and critic 256-128 tanh, Adam at 2e-4, gamma 0.95, lambda 0.95,
+//! minibatch 4096, 10 epochs); the rest are ours, chosen as in common PPO
+//! practice, and every one can be changed in a config file.
+
+use serde::{Deserialize, Serialize};
+
+use crate::LearnError;
+
+/// PPO hyper-parameters (the `[ppo]` table of an experiment file).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PpoConfig {
+    /// hidden layer widths of both the actor and the critic (tanh between layers)
+    pub hidden_sizes: Vec<usize>,
+    /// Adam step size
+    pub learning_rate: f64,
+    /// discount
+    pub gamma: f64,
+    /// GAE lambda
+    pub gae_lambda: f64,
+    /// environment steps per environment per iteration; the batch is
+    /// `envs x steps_per_env`
+    pub steps_per_env: usize,
+    /// minibatch size; a batch smaller than this is one minibatch
+    pub minibatch_size: usize,
+    /// passes over the batch per iteration
+    pub epochs: usize,
+    /// PPO ratio clip epsilon
+    pub clip_range: f64,
+    /// weight of the value loss (mean squared error) in the total loss
+    pub value_coef: f64,
+    /// weight of the entropy bonus
+    pub entropy_coef: f64,
+    /// gradients are rescaled so that the global L2 norm of each network's
+    /// gradient (actor with log-std, critic) is at most this
+    pub max_grad_norm: f64,
+    /// stop the epochs of an iteration early once the approximate KL of a
+    /// minibatch exceeds 1.5 x this (off when absent)
+    pub target_kl: Option<f64>,
+    /// initial log standard deviation of every action dimension. The
+    /// default, -1.6 (sigma 0.2 of the [-1, 1] action range), is ours: with
+    /// sigma 0.5 the untrained robot falls within 3 phases on rigid ground,
+    /// with 0.2 it lasts about 9 (first iteration of `quadwalk train
+    /// --terrain rigid --envs 4`), so that there is something to learn from
+    pub init_log_std: f64,
+    /// normalise advantages to zero mean, unit variance per minibatch
+    pub normalize_advantages: bool,
+    /// normalised observations are clipped to +- this
+    pub obs_clip: f64,
+}
+
+impl Default for PpoConfig {
+    fn default() -> Self {
+        Self {
+            hidden_sizes: vec![256, 128],
+            learning_rate: 2e-4,
+            gamma: 0.95,
+            gae_lambda: 0.95,
+            steps_per_env: 40,
+            minibatch_size: 4096,
+            epochs: 10,
+            clip_range: 0.2,
+            value_coef: 0.5,
+            entropy_coef: 0.0,
+            max_grad_norm: 1.0,
+            target_kl: None,
+            init_log_std: -1.6,
+            normalize_advantages: true,
+            obs_clip: 10.0,
+        }
+    }
+}
+
+impl PpoConfig {
+    /// Checks every value; the error names the key and the rule.
+    pub fn validate(&self) -> Result<(), LearnError> {
+        let bad = |key: &str, rule: &str, value: String| {
+            Err(LearnError::Config(format!(
+                "ppo.{key} = {value}: must be {rule}"
+            )))
+        };
+        if self.hidden_sizes.is_empty() || self.hidden_sizes.iter().any(|&h| h == 0 || h > 65_536) {
+            return bad(
+                "hidden_sizes",
+                "a non-empty list of widths in 1..=65536",
+                format!("{:?}", self.hidden_sizes),
+            );
+        }
+        let in_open_unit = |v: f64| v.is_finite() && v > 0.0 && v <= 1.0;
+        if !(self.learning_rate.is_finite() && self.learning_rate > 0.0 && self.learning_rate < 1.0)
+        {
+            return bad("learning_rate", "in (0, 1)", self.learning_rate.to_string());
+        }
+        if !in_open_unit(self.gamma) {
+            return bad("gamma", "in (0, 1]", self.gamma.to_string());
+        }
+        if !(self.gae_lambda.is_finite() && (0.0..=1.0).contains(&self.gae_lambda)) {
+            return bad("gae_lambda", "in [0, 1]", self.gae_lambda.to_string());
+        }
+        if self.steps_per_env == 0 || self.steps_per_env > 1_000_000 {
+            return bad(
+                "steps_per_env",
+                "in 1..=1000000",
+                self.steps_per_env.to_string(),
+            );
+        }
+        if self.minibatch_size == 0 {
+            return bad(
+                "minibatch_size",
+                "at least 1",
+                self.minibatch_size.to_string(),
+            );
+        }
+        if self.epochs == 0 || self.epochs > 1000 {
+            return bad("epochs", "in 1..=1000", self.epochs.to_string());
+        }
+        if !(self.clip_range.is_finite() && self.clip_range > 0.0 && self.clip_range < 1.0) {
+            return bad("clip_range", "in (0, 1)", self.clip_range.to_string());
+        }
+        for (key, value) in [
+            ("value_coef", self.value_coef),
+            ("entropy_coef", self.entropy_coef),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return bad(key, "finite and >= 0", value.to_string());
+            }
+        }
+        if !(self.max_grad_norm.is_finite() && self.max_grad_norm > 0.0) {
+            return bad(
+                "max_grad_norm",
+                "finite and > 0",
+                self.max_grad_norm.to_string(),
+            );
+        }
+        if let Some(kl) = self.target_kl
+            && !(kl.is_finite() && kl > 0.0)
+        {
+            return bad("target_kl", "finite and > 0", kl.to_string());
+        }
+        if !(self.init_log_std.is_finite() && (-10.0..=2.0).contains(&self.init_log_std)) {
+            return bad("init_log_std", "in [-10, 2]", self.init_log_std.to_string());
+        }
+        if !(self.obs_clip.is_finite() && self.obs_clip > 0.0) {
+            return bad("obs_clip", "finite and > 0", self.obs_clip.to_string());
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_papers_and_valid() {
+        let c = PpoConfig::default();
+        assert_eq!(c.hidden_sizes, vec![256, 128]);
+        assert_eq!(c.learning_rate, 2e-4);
+        assert_eq!((c.gamma, c.gae_lambda), (0.95, 0.95));
+        assert_eq!((c.minibatch_size, c.epochs), (4096, 10));
+        c.validate().unwrap();
+    }
+
+    #[test]
+    fn toml_round_trip_and_unknown_keys() {
+        let c = PpoConfig {
+            target_kl: Some(0.02),
+            ..PpoConfig::default()
+        };
+        let text = toml::to_string(&c).unwrap();
+        let back: PpoConfig = toml::from_str(&text).unwrap();
+        assert_eq!(back, c);
+        let err = toml::from_str::<PpoConfig>("learning_rat = 0.1").unwrap_err();
+        assert!(err.to_string().contains("learning_rat"), "{err}");
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        let c = PpoConfig {
+            gamma: 1.5,
+            ..PpoConfig::default()
+        };
+        let err = c.validate().unwrap_err().to_string();
+        assert!(err.contains("ppo.gamma = 1.5"), "{err}");
+        let c = PpoConfig {
+            hidden_sizes: vec![],
+            ..PpoConfig::default()
+        };
+        assert!(
+            c.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("hidden_sizes")
+        );
+    }
+}

@@ -1,0 +1,336 @@
+//! Actor and critic: two separate MLPs (the paper: 256-128, tanh) and a
+//! diagonal Gaussian policy whose log standard deviation is a learned,
+//! state-independent vector.
+//!
+//! The policy's samples are unbounded; the learner clips them to [-1, 1]
+//! before they reach the environment, and stores the unclipped sample for
+//! the PPO ratio (the usual treatment, as in Stable-Baselines3 and rsl_rl).
+//! Evaluation uses the mean action, clipped the same way.
+
+use candle_core::{D, DType, Device, Tensor, Var};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::LearnError;
+
+/// ln(2 pi)
+const LN_2PI: f64 = 1.837_877_066_409_345_5;
+
+/// A dense layer, `y = x W + b`, `W` stored `in x out`.
+#[derive(Debug, Clone)]
+pub struct Dense {
+    /// `in x out`
+    pub weight: Var,
+    /// `out`
+    pub bias: Var,
+}
+
+/// A multilayer perceptron with tanh between layers and a linear output.
+#[derive(Debug, Clone)]
+pub struct Mlp {
+    /// the layers, input first
+    pub layers: Vec<Dense>,
+}
+
+impl Mlp {
+    /// Layer widths `sizes[0] -> sizes[1] -> ...`. Weights are uniform with
+    /// variance `gain^2 / fan_in` (gain 1 for hidden layers, `output_gain`
+    /// for the last), biases zero, drawn from `rng`.
+    pub fn new(
+        sizes: &[usize],
+        output_gain: f64,
+        rng: &mut ChaCha8Rng,
+        device: &Device,
+    ) -> Result<Self, LearnError> {
+        let mut layers = Vec::new();
+        for (k, pair) in sizes.windows(2).enumerate() {
+            let (fan_in, fan_out) = (pair[0], pair[1]);
+            let gain = if k + 2 == sizes.len() {
+                output_gain
+            } else {
+                1.0
+            };
+            let half_width = gain * (3.0 / fan_in as f64).sqrt();
+            let weights: Vec<f32> = (0..fan_in * fan_out)
+                .map(|_| rng.random_range(-half_width..=half_width) as f32)
+                .collect();
+            layers.push(Dense {
+                weight: Var::from_tensor(&Tensor::from_vec(weights, (fan_in, fan_out), device)?)?,
+                bias: Var::from_tensor(&Tensor::zeros(fan_out, DType::F32, device)?)?,
+            });
+        }
+        Ok(Self { layers })
+    }
+
+    /// `x`: `B x in` -> `B x out`.
+    pub fn forward(&self, x: &Tensor) -> candle_core::Result<Tensor> {
+        let mut h = x.clone();
+        for (k, layer) in self.layers.iter().enumerate() {
+            h = h
+                .matmul(layer.weight.as_tensor())?
+                .broadcast_add(layer.bias.as_tensor())?;
+            if k + 1 < self.layers.len() {
+                h = h.tanh()?;
+            }
+        }
+        Ok(h)
+    }
+
+    fn named_vars(&self, prefix: &str) -> Vec<(String, Var)> {
+        self.layers
+            .iter()
+            .enumerate()
+            .flat_map(|(k, l)| {
+                [
+                    (format!("{prefix}.{k}.weight"), l.weight.clone()),
+                    (format!("{prefix}.{k}.bias"), l.bias.clone()),
+                ]
+            })
+            .collect()
+    }
+}
+
+/// The actor (Gaussian mean), its log-std, and the critic.
+#[derive(Debug, Clone)]
+pub struct ActorCritic {
+    /// observation -> action mean
+    pub actor: Mlp,
+    /// `A` log standard deviations
+    pub log_std: Var,
+    /// observation -> value
+    pub critic: Mlp,
+    obs_size: usize,
+    action_size: usize,
+    device: Device,
+}
+
+impl ActorCritic {
+    /// Fresh networks: `obs_size -> hidden... -> action_size` (output gain
+    /// 0.01, so the first actions are near 0) and `obs_size -> hidden... -> 1`.
+    pub fn new(
+        obs_size: usize,
+        action_size: usize,
+        hidden: &[usize],
+        init_log_std: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Self, LearnError> {
+        let device = Device::Cpu;
+        let sizes = |out: usize| {
+            std::iter::once(obs_size)
+                .chain(hidden.iter().copied())
+                .chain(std::iter::once(out))
+                .collect::<Vec<_>>()
+        };
+        let actor = Mlp::new(&sizes(action_size), 0.01, rng, &device)?;
+        let critic = Mlp::new(&sizes(1), 1.0, rng, &device)?;
+        let log_std = Var::from_tensor(&Tensor::full(init_log_std as f32, action_size, &device)?)?;
+        Ok(Self {
+            actor,
+            log_std,
+            critic,
+            obs_size,
+            action_size,
+            device,
+        })
+    }
+
+    /// `O`.
+    pub fn obs_size(&self) -> usize {
+        self.obs_size
+    }
+
+    /// `A`.
+    pub fn action_size(&self) -> usize {
+        self.action_size
+    }
+
+    /// The device (CPU).
+    pub fn device(&self) -> &Device {
+        &self.device
+    }
+
+    /// The actor's parameters with the log-std, named as in checkpoints.
+    pub fn actor_vars(&self) -> Vec<(String, Var)> {
+        let mut vars = self.actor.named_vars("actor");
+        vars.push(("log_std".into(), self.log_std.clone()));
+        vars
+    }
+
+    /// The critic's parameters, named as in checkpoints.
+    pub fn critic_vars(&self) -> Vec<(String, Var)> {
+        self.critic.named_vars("critic")
+    }
+
+    /// All parameters: actor, log-std, critic.
+    pub fn named_vars(&self) -> Vec<(String, Var)> {
+        let mut vars = self.actor_vars();
+        vars.extend(self.critic_vars());
+        vars
+    }
+
+    /// `k x O` observations as a tensor.
+    pub fn obs_tensor(&self, obs: &[f32]) -> Result<Tensor, LearnError> {
+        let k = obs.len() / self.obs_size;
+        Ok(Tensor::from_slice(obs, (k, self.obs_size), &self.device)?)
+    }
+
+    /// Action means for `k x O` (normalised) observations, `k x A`.
+    pub fn mean_actions(&self, obs: &[f32]) -> Result<Vec<f32>, LearnError> {
+        let x = self.obs_tensor(obs)?;
+        Ok(self.actor.forward(&x)?.flatten_all()?.to_vec1()?)
+    }
+
+    /// Values for `k x O` (normalised) observations, `k`.
+    pub fn values(&self, obs: &[f32]) -> Result<Vec<f32>, LearnError> {
+        let x = self.obs_tensor(obs)?;
+        Ok(self.critic.forward(&x)?.flatten_all()?.to_vec1()?)
+    }
+
+    /// Samples actions for `k x O` observations: returns the unclipped
+    /// samples `k x A` and their log-probabilities `k`.
+    pub fn sample(
+        &self,
+        obs: &[f32],
+        rng: &mut ChaCha8Rng,
+    ) -> Result<(Vec<f32>, Vec<f32>), LearnError> {
+        let mean = self.mean_actions(obs)?;
+        let log_std: Vec<f32> = self.log_std.as_tensor().to_vec1()?;
+        let a = self.action_size;
+        let log_std_sum: f64 = log_std.iter().map(|&s| f64::from(s)).sum();
+        let mut actions = vec![0.0f32; mean.len()];
+        let mut log_probs = Vec::with_capacity(mean.len() / a);
+        for (row_mean, row_action) in mean.chunks_exact(a).zip(actions.chunks_exact_mut(a)) {
+            let mut square_sum = 0.0f64;
+            for ((m, s), out) in row_mean.iter().zip(&log_std).zip(row_action.iter_mut()) {
+                let z = standard_normal(rng);
+                *out = (f64::from(*m) + f64::from(*s).exp() * z) as f32;
+                square_sum += z * z;
+            }
+            log_probs.push((-0.5 * square_sum - log_std_sum - 0.5 * a as f64 * LN_2PI) as f32);
+        }
+        Ok((actions, log_probs))
+    }
+}
+
+/// Log-density of a diagonal Gaussian: `mean`, `actions` `B x A`,
+/// `log_std` `A`; result `B`.
+///
+/// `log p(a) = -1/2 sum_j ((a_j - mu_j) / sigma_j)^2 - sum_j log sigma_j - A/2 ln(2 pi)`
+pub fn gaussian_log_prob(
+    mean: &Tensor,
+    log_std: &Tensor,
+    actions: &Tensor,
+) -> candle_core::Result<Tensor> {
+    let action_size = log_std.dim(0)?;
+    let z = actions.sub(mean)?.broadcast_div(&log_std.exp()?)?;
+    let quadratic = z.sqr()?.sum(D::Minus1)?.affine(-0.5, 0.0)?;
+    let constant = log_std
+        .sum_all()?
+        .affine(-1.0, -0.5 * action_size as f64 * LN_2PI)?;
+    quadratic.broadcast_add(&constant)
+}
+
+/// Entropy of the diagonal Gaussian: `sum_j (log sigma_j + (1 + ln(2 pi)) / 2)`.
+pub fn gaussian_entropy(log_std: &Tensor) -> candle_core::Result<Tensor> {
+    let action_size = log_std.dim(0)?;
+    log_std
+        .sum_all()?
+        .affine(1.0, 0.5 * (1.0 + LN_2PI) * action_size as f64)
+}
+
+/// One standard normal draw (Box-Muller), deterministic for a given `rng`.
+pub fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
+    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2: f64 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+
+    use super::*;
+
+    #[test]
+    fn log_prob_matches_the_formula() {
+        let dev = Device::Cpu;
+        let mean = Tensor::new(&[[0.0f32, 1.0], [0.5, -0.5]], &dev).unwrap();
+        let log_std = Tensor::new(&[0.0f32, -1.0], &dev).unwrap();
+        let actions = Tensor::new(&[[1.0f32, 1.0], [0.5, 0.0]], &dev).unwrap();
+        let lp: Vec<f32> = gaussian_log_prob(&mean, &log_std, &actions)
+            .unwrap()
+            .to_vec1()
+            .unwrap();
+        let sigma1 = (-1.0f64).exp();
+        let expect0 = -0.5 * 1.0 - (0.0 - 1.0) - LN_2PI;
+        let expect1 = -0.5 * (0.5 / sigma1).powi(2) + 1.0 - LN_2PI;
+        assert!(
+            (f64::from(lp[0]) - expect0).abs() < 1e-5,
+            "{} vs {expect0}",
+            lp[0]
+        );
+        assert!(
+            (f64::from(lp[1]) - expect1).abs() < 1e-5,
+            "{} vs {expect1}",
+            lp[1]
+        );
+        let h: f32 = gaussian_entropy(&log_std).unwrap().to_scalar().unwrap();
+        assert!((f64::from(h) - (-1.0 + (1.0 + LN_2PI))).abs() < 1e-5);
+    }
+
+    #[test]
+    fn sampled_log_probs_agree_with_the_tensor_formula() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let ac = ActorCritic::new(4, 3, &[8, 8], -0.5, &mut rng).unwrap();
+        let obs = [0.1f32, -0.2, 0.3, 0.4, 1.0, 0.0, -1.0, 0.5];
+        let (actions, lp) = ac.sample(&obs, &mut rng).unwrap();
+        let mean = ac.actor.forward(&ac.obs_tensor(&obs).unwrap()).unwrap();
+        let a = Tensor::from_slice(&actions, (2, 3), &Device::Cpu).unwrap();
+        let lp2: Vec<f32> = gaussian_log_prob(&mean, ac.log_std.as_tensor(), &a)
+            .unwrap()
+            .to_vec1()
+            .unwrap();
+        for (x, y) in lp.iter().zip(&lp2) {
+            assert!((x - y).abs() < 1e-4, "{x} vs {y}");
+        }
+    }
+
+    #[test]
+    fn same_seed_same_networks() {
+        let a = ActorCritic::new(5, 2, &[16], -0.7, &mut ChaCha8Rng::seed_from_u64(9)).unwrap();
+        let b = ActorCritic::new(5, 2, &[16], -0.7, &mut ChaCha8Rng::seed_from_u64(9)).unwrap();
+        for ((na, va), (nb, vb)) in a.named_vars().iter().zip(b.named_vars().iter()) {
+            assert_eq!(na, nb);
+            let x: Vec<f32> = va.as_tensor().flatten_all().unwrap().to_vec1().unwrap();
+            let y: Vec<f32> = vb.as_tensor().flatten_all().unwrap().to_vec1().unwrap();
+            assert_eq!(x, y);
+        }
+        let names: Vec<String> = a.named_vars().into_iter().map(|(n, _)| n).collect();
+        assert_eq!(
+            names,
+            [
+                "actor.0.weight",
+                "actor.0.bias",
+                "actor.1.weight",
+                "actor.1.bias",
+                "log_std",
+                "critic.0.weight",
+                "critic.0.bias",
+                "critic.1.weight",
+                "critic.1.bias"
+            ]
+        );
+    }
+
+    #[test]
+    fn standard_normal_has_unit_moments() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let xs: Vec<f64> = (0..20_000).map(|_| standard_normal(&mut rng)).collect();
+        let mean = xs.iter().sum::<f64>() / xs.len() as f64;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / xs.len() as f64;
+        assert!(
+            mean.abs() < 0.03 && (var - 1.0).abs() < 0.05,
+            "{mean} {var}"
+        );
+    }
+}

@@ -1,0 +1,536 @@
+//! The PPO runner: one iteration = reset every environment, collect
+//! `steps_per_env` steps from each, GAE, `epochs` passes of minibatch
+//! updates, statistics.
+//!
+//! Every iteration starts from fresh episodes (seeded by the run's seed and
+//! the iteration number), so the whole state of a run between iterations is
+//! the networks, the optimiser, the normaliser, the sampling RNG and the
+//! iteration count: exactly what a checkpoint holds. Resuming from a
+//! checkpoint therefore continues bit for bit as the uninterrupted run.
+//! An episode still running when the iteration ends is cut there and
+//! bootstrapped from the critic.
+
+use std::time::Instant;
+
+use candle_core::{Tensor, Var};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::LearnError;
+use crate::buffer::RolloutBuffer;
+use crate::config::PpoConfig;
+use crate::env::{StepResult, VecEnv};
+use crate::gae::gae;
+use crate::normalizer::ObsNormalizer;
+use crate::optim::{Adam, clip_grad_norm, gradients};
+use crate::policy::ActorCritic;
+use crate::ppo::{Minibatch, ppo_loss};
+
+/// What one iteration did. Means over episodes are `None` when no episode
+/// ended in the iteration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IterationStats {
+    /// iterations completed, this one included (1 after the first)
+    pub iteration: u64,
+    /// environment steps collected (`envs x steps_per_env`)
+    pub steps: usize,
+    /// episodes that ended (terminated or truncated by the environment)
+    pub episodes: usize,
+    /// of them, terminated
+    pub terminated: usize,
+    /// mean undiscounted return of the ended episodes
+    pub mean_episode_return: Option<f64>,
+    /// mean length (steps) of the ended episodes
+    pub mean_episode_length: Option<f64>,
+    /// mean of each environment metric over the ended episodes, named
+    pub episode_metrics: Vec<(String, Option<f64>)>,
+    /// mean reward per step
+    pub mean_step_reward: f64,
+    /// mean of each reward term per step, named
+    pub reward_terms: Vec<(String, f64)>,
+    /// clipped surrogate loss, mean over the minibatch updates
+    pub policy_loss: f64,
+    /// value loss (MSE), mean over the updates
+    pub value_loss: f64,
+    /// policy entropy after the update
+    pub entropy: f64,
+    /// approximate KL, mean over the updates
+    pub approx_kl: f64,
+    /// clip fraction, mean over the updates
+    pub clip_fraction: f64,
+    /// `1 - Var(R - V) / Var(R)` of the critic before the update
+    pub explained_variance: f64,
+    /// mean gradient norm (actor, critic) before clipping
+    pub grad_norm: (f64, f64),
+    /// mean policy standard deviation after the update
+    pub action_std: f64,
+    /// epochs run (fewer than configured when the KL stop fired)
+    pub epochs: usize,
+    /// seconds stepping the environments
+    pub env_secs: f64,
+    /// seconds in the network while collecting (inference)
+    pub inference_secs: f64,
+    /// seconds in the update (GAE, losses, gradients, Adam)
+    pub update_secs: f64,
+    /// environment steps per second over the whole iteration
+    pub steps_per_sec: f64,
+}
+
+/// The state that goes into and comes out of a checkpoint, besides the
+/// tensors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RngState {
+    /// the ChaCha8 seed
+    pub seed: [u8; 32],
+    /// its stream
+    pub stream: u64,
+    /// its word position
+    pub word_pos: u128,
+}
+
+/// PPO on a [`VecEnv`].
+#[derive(Debug, Clone)]
+pub struct Trainer {
+    /// settings
+    pub config: PpoConfig,
+    /// actor and critic
+    pub policy: ActorCritic,
+    /// optimiser over all of the policy's parameters
+    pub adam: Adam,
+    /// observation statistics
+    pub normalizer: ObsNormalizer,
+    /// the run's seed (environment seeds derive from it)
+    pub seed: u64,
+    /// iterations completed
+    pub iteration: u64,
+    rng: ChaCha8Rng,
+}
+
+/// A well-mixed 64-bit value of `(seed, k)` (SplitMix64 finaliser).
+pub fn derive_seed(seed: u64, k: u64) -> u64 {
+    let mut z = seed ^ k.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+impl Trainer {
+    /// Fresh networks for `obs_size` observations and `action_size` actions.
+    pub fn new(
+        config: PpoConfig,
+        obs_size: usize,
+        action_size: usize,
+        seed: u64,
+    ) -> Result<Self, LearnError> {
+        config.validate()?;
+        if obs_size == 0 || action_size == 0 {
+            return Err(LearnError::Config(format!(
+                "observation size {obs_size} and action size {action_size} must both be positive"
+            )));
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let policy = ActorCritic::new(
+            obs_size,
+            action_size,
+            &config.hidden_sizes,
+            config.init_log_std,
+            &mut rng,
+        )?;
+        let adam = Adam::new(policy.named_vars(), config.learning_rate)?;
+        let normalizer = ObsNormalizer::new(obs_size, config.obs_clip);
+        Ok(Self {
+            config,
+            policy,
+            adam,
+            normalizer,
+            seed,
+            iteration: 0,
+            rng,
+        })
+    }
+
+    /// Reassembles a trainer from checkpoint parts (see `checkpoint`).
+    pub(crate) fn from_parts(
+        config: PpoConfig,
+        policy: ActorCritic,
+        adam: Adam,
+        normalizer: ObsNormalizer,
+        seed: u64,
+        iteration: u64,
+        rng: RngState,
+    ) -> Self {
+        let mut generator = ChaCha8Rng::from_seed(rng.seed);
+        generator.set_stream(rng.stream);
+        generator.set_word_pos(rng.word_pos);
+        Self {
+            config,
+            policy,
+            adam,
+            normalizer,
+            seed,
+            iteration,
+            rng: generator,
+        }
+    }
+
+    /// The sampling RNG's position.
+    pub fn rng_state(&self) -> RngState {
+        RngState {
+            seed: self.rng.get_seed(),
+            stream: self.rng.get_stream(),
+            word_pos: self.rng.get_word_pos(),
+        }
+    }
+
+    /// The environment seed of iteration `iteration` (0-based).
+    pub fn env_seed(&self, iteration: u64) -> u64 {
+        derive_seed(self.seed, iteration)
+    }
+
+    /// Deterministic actions for raw observations `k x O`: normalised, the
+    /// policy mean, clipped to [-1, 1].
+    pub fn act_deterministic(&self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError> {
+        let mut obs = raw_obs.to_vec();
+        self.normalizer.normalize(&mut obs);
+        let mut actions = self.policy.mean_actions(&obs)?;
+        actions.iter_mut().for_each(|a| *a = a.clamp(-1.0, 1.0));
+        Ok(actions)
+    }
+
+    /// Sampled actions for raw observations `k x O`: normalised, a draw from
+    /// the policy's Gaussian on `rng`, clipped to [-1, 1].
+    pub fn act_stochastic(
+        &self,
+        raw_obs: &[f32],
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Vec<f32>, LearnError> {
+        let mut obs = raw_obs.to_vec();
+        self.normalizer.normalize(&mut obs);
+        let (mut actions, _) = self.policy.sample(&obs, rng)?;
+        actions.iter_mut().for_each(|a| *a = a.clamp(-1.0, 1.0));
+        Ok(actions)
+    }
+
+    /// Checks that `env` fits the networks.
+    fn check_env(&self, env: &dyn VecEnv) -> Result<(), LearnError> {
+        if env.observation_size() != self.policy.obs_size()
+            || env.action_size() != self.policy.action_size()
+        {
+            return Err(LearnError::Mismatch(format!(
+                "the environment has {} observations and {} actions, the policy {} and {}",
+                env.observation_size(),
+                env.action_size(),
+                self.policy.obs_size(),
+                self.policy.action_size()
+            )));
+        }
+        if env.num_envs() == 0 {
+            return Err(LearnError::Config("no environments".into()));
+        }
+        Ok(())
+    }
+
+    /// Runs one iteration: collect, then update.
+    pub fn iterate(&mut self, env: &mut dyn VecEnv) -> Result<IterationStats, LearnError> {
+        self.check_env(env)?;
+        let started = Instant::now();
+        let n = env.num_envs();
+        let o = env.observation_size();
+        let a = env.action_size();
+        let steps = self.config.steps_per_env;
+        let term_names = env.reward_term_names();
+        let metric_names = env.episode_metric_names();
+        let (t_count, m_count) = (term_names.len(), metric_names.len());
+        let gamma = self.config.gamma;
+
+        // ---- collect -------------------------------------------------------
+        let mut env_secs = 0.0;
+        let mut inference_secs = 0.0;
+        let mut raw_obs = vec![0.0f32; n * o];
+        let clock = Instant::now();
+        env.reset_all(self.env_seed(self.iteration), &mut raw_obs);
+        env_secs += clock.elapsed().as_secs_f64();
+        let mut out = StepResult::new(env);
+
+        let mut buffer = RolloutBuffer::new(n, o, a, steps);
+
+        let mut running_return = vec![0.0f64; n];
+        let mut running_length = vec![0usize; n];
+        let (mut episodes, mut terminated) = (0usize, 0usize);
+        let (mut return_sum, mut length_sum) = (0.0f64, 0.0f64);
+        let mut metric_sums = vec![0.0f64; m_count];
+        let mut term_sums = vec![0.0f64; t_count];
+        let mut reward_sum = 0.0f64;
+
+        for _ in 0..steps {
+            let clock = Instant::now();
+            self.normalizer.update(&raw_obs);
+            let mut obs = raw_obs.clone();
+            self.normalizer.normalize(&mut obs);
+            let (actions, log_probs) = self.policy.sample(&obs, &mut self.rng)?;
+            let values = self.policy.values(&obs)?;
+            let clipped: Vec<f32> = actions.iter().map(|x| x.clamp(-1.0, 1.0)).collect();
+            inference_secs += clock.elapsed().as_secs_f64();
+
+            let clock = Instant::now();
+            env.step(&clipped, &mut out);
+            env_secs += clock.elapsed().as_secs_f64();
+
+            // bootstrap episodes cut by the environment's time limit:
+            // r_t + gamma V(final_obs)
+            let mut rewards = out.rewards.clone();
+            let cut: Vec<usize> = (0..n)
+                .filter(|&i| out.truncated[i] && !out.terminated[i])
+                .collect();
+            if !cut.is_empty() {
+                let clock = Instant::now();
+                let mut final_obs: Vec<f32> = cut
+                    .iter()
+                    .flat_map(|&i| out.final_obs[i * o..(i + 1) * o].to_vec())
+                    .collect();
+                self.normalizer.normalize(&mut final_obs);
+                let final_values = self.policy.values(&final_obs)?;
+                for (&i, v) in cut.iter().zip(final_values) {
+                    rewards[i] += (gamma * f64::from(v)) as f32;
+                }
+                inference_secs += clock.elapsed().as_secs_f64();
+            }
+
+            for i in 0..n {
+                let r = f64::from(out.rewards[i]);
+                reward_sum += r;
+                running_return[i] += r;
+                running_length[i] += 1;
+                for (k, sum) in term_sums.iter_mut().enumerate() {
+                    *sum += f64::from(out.reward_terms[i * t_count + k]);
+                }
+                if out.ended(i) {
+                    episodes += 1;
+                    terminated += usize::from(out.terminated[i]);
+                    return_sum += running_return[i];
+                    length_sum += running_length[i] as f64;
+                    for (k, sum) in metric_sums.iter_mut().enumerate() {
+                        *sum += f64::from(out.episode_metrics[i * m_count + k]);
+                    }
+                    running_return[i] = 0.0;
+                    running_length[i] = 0;
+                }
+            }
+            buffer.push(
+                &obs,
+                &actions,
+                &log_probs,
+                &values,
+                &rewards,
+                (0..n).map(|i| out.ended(i)),
+            );
+            raw_obs.copy_from_slice(&out.obs);
+        }
+
+        // ---- advantages ----------------------------------------------------
+        let update_clock = Instant::now();
+        let mut last_obs = raw_obs.clone();
+        self.normalizer.normalize(&mut last_obs);
+        let last_values = self.policy.values(&last_obs)?;
+        let g = gae(
+            &buffer.rewards,
+            &buffer.values,
+            &buffer.ended,
+            &last_values,
+            gamma,
+            self.config.gae_lambda,
+        );
+        let explained_variance = explained_variance(&buffer.values, &g.returns);
+
+        // ---- update ----------------------------------------------------------
+        let total = steps * n;
+        let device = self.policy.device().clone();
+        let all_obs = Tensor::from_vec(buffer.obs, (total, o), &device)?;
+        let all_actions = Tensor::from_vec(buffer.actions, (total, a), &device)?;
+        let all_log_probs = Tensor::from_vec(buffer.log_probs, total, &device)?;
+        let all_returns = Tensor::from_vec(g.returns.clone(), total, &device)?;
+        let advantages = g.advantages;
+        let minibatch = self.config.minibatch_size.min(total);
+        let actor_vars = self.policy.actor_vars();
+        let critic_vars = self.policy.critic_vars();
+        let split = actor_vars.len();
+
+        let mut sums = [0.0f64; 6]; // policy, value, kl, clip, actor grad, critic grad
+        let mut updates = 0usize;
+        let mut epochs_run = 0usize;
+        'epochs: for _ in 0..self.config.epochs {
+            epochs_run += 1;
+            let order = self.permutation(total);
+            for chunk in order.chunks(minibatch) {
+                let index = Tensor::from_vec(chunk.to_vec(), chunk.len(), &device)?;
+                let mut adv: Vec<f32> = chunk.iter().map(|&k| advantages[k as usize]).collect();
+                if self.config.normalize_advantages {
+                    normalize_in_place(&mut adv);
+                }
+                let batch = Minibatch {
+                    obs: all_obs.index_select(&index, 0)?,
+                    actions: all_actions.index_select(&index, 0)?,
+                    old_log_probs: all_log_probs.index_select(&index, 0)?,
+                    advantages: Tensor::from_vec(adv, chunk.len(), &device)?,
+                    returns: all_returns.index_select(&index, 0)?,
+                };
+                let loss = ppo_loss(&self.policy, &batch, &self.config)?;
+                let grads = loss.total.backward()?;
+                let mut actor_grads = gradients(&grads, &actor_vars)?;
+                let mut critic_grads = gradients(&grads, &critic_vars)?;
+                let actor_norm = clip_grad_norm(&mut actor_grads, self.config.max_grad_norm)?;
+                let critic_norm = clip_grad_norm(&mut critic_grads, self.config.max_grad_norm)?;
+                actor_grads.extend(critic_grads);
+                debug_assert_eq!(actor_grads.len(), split + critic_vars.len());
+                self.adam.apply(&actor_grads)?;
+                for (sum, value) in sums.iter_mut().zip([
+                    loss.policy_loss,
+                    loss.value_loss,
+                    loss.approx_kl,
+                    loss.clip_fraction,
+                    actor_norm,
+                    critic_norm,
+                ]) {
+                    *sum += value;
+                }
+                updates += 1;
+                if let Some(target) = self.config.target_kl
+                    && loss.approx_kl > 1.5 * target
+                {
+                    break 'epochs;
+                }
+            }
+        }
+        let update_secs = update_clock.elapsed().as_secs_f64();
+        self.iteration += 1;
+
+        let log_std: Vec<f32> = self.policy.log_std.as_tensor().to_vec1()?;
+        let mean = |s: f64| s / updates.max(1) as f64;
+        let per_episode = |s: f64| (episodes > 0).then(|| s / episodes as f64);
+        Ok(IterationStats {
+            iteration: self.iteration,
+            steps: total,
+            episodes,
+            terminated,
+            mean_episode_return: per_episode(return_sum),
+            mean_episode_length: per_episode(length_sum),
+            episode_metrics: metric_names
+                .into_iter()
+                .zip(metric_sums.iter().map(|&s| per_episode(s)))
+                .collect(),
+            mean_step_reward: reward_sum / total as f64,
+            reward_terms: term_names
+                .into_iter()
+                .zip(term_sums.iter().map(|s| s / total as f64))
+                .collect(),
+            policy_loss: mean(sums[0]),
+            value_loss: mean(sums[1]),
+            entropy: f64::from(
+                crate::policy::gaussian_entropy(self.policy.log_std.as_tensor())?
+                    .to_scalar::<f32>()?,
+            ),
+            approx_kl: mean(sums[2]),
+            clip_fraction: mean(sums[3]),
+            explained_variance,
+            grad_norm: (mean(sums[4]), mean(sums[5])),
+            action_std: log_std.iter().map(|s| f64::from(s.exp())).sum::<f64>()
+                / log_std.len() as f64,
+            epochs: epochs_run,
+            env_secs,
+            inference_secs,
+            update_secs,
+            steps_per_sec: total as f64 / started.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// A uniformly random permutation of `0..n` (Fisher-Yates on the
+    /// trainer's RNG).
+    fn permutation(&mut self, n: usize) -> Vec<u32> {
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        for i in (1..n).rev() {
+            let j = self.rng.random_range(0..=i);
+            order.swap(i, j);
+        }
+        order
+    }
+
+    /// All parameters, named as in checkpoints.
+    pub fn named_vars(&self) -> Vec<(String, Var)> {
+        self.policy.named_vars()
+    }
+}
+
+/// Zero mean, unit variance (unchanged when the spread is ~0).
+fn normalize_in_place(values: &mut [f32]) {
+    let n = values.len() as f64;
+    if values.len() < 2 {
+        return;
+    }
+    let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
+    let var = values
+        .iter()
+        .map(|&v| (f64::from(v) - mean).powi(2))
+        .sum::<f64>()
+        / n;
+    let std = var.sqrt() + 1e-8;
+    for v in values.iter_mut() {
+        *v = ((f64::from(*v) - mean) / std) as f32;
+    }
+}
+
+/// `1 - Var(R - V) / Var(R)`; 0 when the returns do not vary.
+pub fn explained_variance(values: &[f32], returns: &[f32]) -> f64 {
+    let n = returns.len() as f64;
+    let var = |xs: &mut dyn Iterator<Item = f64>| {
+        let xs: Vec<f64> = xs.collect();
+        let mean = xs.iter().sum::<f64>() / n;
+        xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n
+    };
+    let var_returns = var(&mut returns.iter().map(|&r| f64::from(r)));
+    if var_returns < 1e-12 {
+        return 0.0;
+    }
+    let var_residual = var(&mut returns
+        .iter()
+        .zip(values)
+        .map(|(&r, &v)| f64::from(r) - f64::from(v)));
+    1.0 - var_residual / var_returns
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn explained_variance_of_perfect_and_useless_critics() {
+        let returns = [1.0f32, 2.0, 3.0, 4.0];
+        assert!((explained_variance(&returns, &returns) - 1.0).abs() < 1e-12);
+        assert!(explained_variance(&[2.5; 4], &returns).abs() < 1e-12);
+        assert_eq!(explained_variance(&[0.0; 3], &[1.0; 3]), 0.0);
+    }
+
+    #[test]
+    fn derived_seeds_differ_and_repeat() {
+        assert_eq!(derive_seed(7, 3), derive_seed(7, 3));
+        assert_ne!(derive_seed(7, 3), derive_seed(7, 4));
+        assert_ne!(derive_seed(7, 3), derive_seed(8, 3));
+    }
+
+    #[test]
+    fn permutation_is_a_permutation() {
+        let mut t = Trainer::new(
+            PpoConfig {
+                hidden_sizes: vec![4],
+                ..PpoConfig::default()
+            },
+            3,
+            2,
+            1,
+        )
+        .unwrap();
+        let mut p = t.permutation(100);
+        assert_ne!(p, (0..100).collect::<Vec<u32>>());
+        p.sort_unstable();
+        assert_eq!(p, (0..100).collect::<Vec<u32>>());
+    }
+}

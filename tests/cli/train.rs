@@ -1,0 +1,475 @@
+//! `quadwalk train`: checkpoints, resume, Ctrl-C, a kill during a save,
+//! damaged checkpoints, and trained policies in `rollout` and `play`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+use super::{failure, json_of, quadwalk};
+
+/// A small, fast experiment: 2 worlds x 4 phases per iteration.
+const TINY: &str = "[terrain]\nspec = \"rigid\"\n\n[task]\nmax_phases = 4\n\n[ppo]\nhidden_sizes = [16]\nsteps_per_env = 4\nminibatch_size = 4\nepochs = 2\n\n[train]\nenvs = 2\niterations = 3\ncheckpoint_every = 1\n";
+
+/// A fresh directory under the test target's scratch space.
+fn scratch_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("train")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn tiny_config(dir: &Path) -> PathBuf {
+    let path = dir.join("tiny.toml");
+    std::fs::write(&path, TINY).unwrap();
+    path
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Runs `quadwalk ARGS`, which must succeed; returns its stderr.
+fn ok(args: &[&str]) -> String {
+    let out = quadwalk(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "quadwalk {args:?}: {stderr}");
+    stderr
+}
+
+/// `quadwalk train --config CONFIG --run-dir RUN --iterations N --rerun off`.
+fn train_tiny(config: &Path, run: &Path, iterations: &str) {
+    ok(&[
+        "train",
+        "--config",
+        s(config),
+        "--run-dir",
+        s(run),
+        "--iterations",
+        iterations,
+        "--rerun",
+        "off",
+    ]);
+}
+
+/// The metrics lines without the fields that measure time.
+fn metrics_without_timing(run: &Path) -> Vec<Value> {
+    std::fs::read_to_string(run.join("metrics.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|line| {
+            let mut v: Value = serde_json::from_str(line).unwrap();
+            let o = v.as_object_mut().unwrap();
+            o.remove("secs");
+            o.remove("phases_per_s");
+            v
+        })
+        .collect()
+}
+
+fn weights(run: &Path) -> Vec<u8> {
+    std::fs::read(run.join("latest/weights.safetensors")).unwrap()
+}
+
+#[test]
+fn same_seed_same_training_and_resume_continues_bit_for_bit() {
+    let dir = scratch_dir("resume");
+    let config = tiny_config(&dir);
+    let (a, b, c) = (dir.join("a"), dir.join("b"), dir.join("c"));
+    let train = |run: &Path, iterations: &str| {
+        ok(&[
+            "train",
+            "--config",
+            s(&config),
+            "--run-dir",
+            s(run),
+            "--iterations",
+            iterations,
+            "--threads",
+            "2",
+            "--rerun",
+            "off",
+        ])
+    };
+    let progress = train(&a, "3");
+    assert!(
+        progress.contains("iter 3/3") && progress.contains("phases/s"),
+        "{progress}"
+    );
+    train(&c, "3");
+    assert_eq!(
+        weights(&a),
+        weights(&c),
+        "same seed and threads, different weights"
+    );
+    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&c));
+
+    train(&b, "2");
+    ok(&[
+        "train",
+        "--resume",
+        s(&b),
+        "--iterations",
+        "3",
+        "--threads",
+        "2",
+        "--rerun",
+        "off",
+    ]);
+    assert_eq!(
+        weights(&a),
+        weights(&b),
+        "a resumed run differs from the uninterrupted one"
+    );
+    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+    assert_eq!(metrics_without_timing(&b).len(), 3);
+
+    // the run directory's layout
+    let latest = std::fs::read_link(a.join("latest")).unwrap();
+    assert_eq!(latest, Path::new("checkpoints/iter-000003"));
+    for file in ["weights.safetensors", "state.toml", "config.toml"] {
+        assert!(a.join("latest").join(file).is_file(), "{file}");
+    }
+    let m = &metrics_without_timing(&a)[0];
+    for key in [
+        "mean_return",
+        "mean_distance_m",
+        "mean_episode_length",
+        "reward_terms",
+        "policy_loss",
+        "value_loss",
+        "entropy",
+        "approx_kl",
+        "clip_fraction",
+        "explained_variance",
+    ] {
+        assert!(m.get(key).is_some(), "{key} missing in {m}");
+    }
+    assert_eq!(m["reward_terms"].as_object().unwrap().len(), 5);
+
+    // a finished run says so; a fresh run into a used directory is refused
+    let err = failure(&["train", "--resume", s(&a), "--rerun", "off"], 1);
+    assert!(err.contains("3 of 3 iterations"), "{err}");
+    let err = failure(
+        &[
+            "train",
+            "--config",
+            s(&config),
+            "--run-dir",
+            s(&a),
+            "--rerun",
+            "off",
+        ],
+        1,
+    );
+    assert!(
+        err.contains("already holds a run") && err.contains("--resume"),
+        "{err}"
+    );
+}
+
+#[test]
+fn trained_checkpoints_play_and_roll_out() {
+    let dir = scratch_dir("play");
+    let config = tiny_config(&dir);
+    let run = dir.join("run");
+    train_tiny(&config, &run, "1");
+    let roll_out = || {
+        json_of(&[
+            "rollout",
+            "--policy",
+            s(&run),
+            "--terrain",
+            "elastic:5cm",
+            "--phases",
+            "3",
+            "--json",
+        ])
+    };
+    let r = roll_out();
+    assert!(r["phases"].as_u64().unwrap() >= 1, "{r}");
+    assert_eq!(r["policy"], s(&run));
+    // deterministic mean action: the same rollout twice
+    let again = roll_out();
+    assert_eq!(r["distance_m"], again["distance_m"]);
+    // --stochastic samples the Gaussian: repeatable for a seed
+    let sampled = |seed: &str| {
+        json_of(&[
+            "rollout",
+            "--policy",
+            s(&run),
+            "--terrain",
+            "rigid",
+            "--phases",
+            "3",
+            "--stochastic",
+            "--seed",
+            seed,
+            "--json",
+        ])["distance_m"]
+            .clone()
+    };
+    assert_eq!(sampled("4"), sampled("4"));
+    let err = failure(&["rollout", "--stochastic", "--phases", "1"], 1);
+    assert!(err.contains("--stochastic needs a trained policy"), "{err}");
+    let p = json_of(&[
+        "play",
+        "--checkpoint",
+        s(&run.join("latest")),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--rerun",
+        "off",
+        "--json",
+    ]);
+    assert!(p["phases"].as_u64().unwrap() >= 1, "{p}");
+}
+
+#[test]
+fn damaged_and_mismatched_checkpoints_give_clear_errors() {
+    let dir = scratch_dir("damaged");
+    let config = tiny_config(&dir);
+    let run = dir.join("run");
+    train_tiny(&config, &run, "1");
+    let checkpoint = run.join("checkpoints/iter-000001");
+
+    let copy = |name: &str| {
+        let to = dir.join(name);
+        std::fs::create_dir_all(&to).unwrap();
+        for file in ["weights.safetensors", "state.toml", "config.toml"] {
+            std::fs::copy(checkpoint.join(file), to.join(file)).unwrap();
+        }
+        to
+    };
+    // truncated weights
+    let truncated = copy("truncated");
+    let bytes = std::fs::read(truncated.join("weights.safetensors")).unwrap();
+    std::fs::write(
+        truncated.join("weights.safetensors"),
+        &bytes[..bytes.len() / 2],
+    )
+    .unwrap();
+    let err = failure(&["rollout", "--policy", s(&truncated), "--phases", "1"], 1);
+    assert!(
+        err.contains("weights.safetensors") && err.contains("damaged or truncated"),
+        "{err}"
+    );
+    // one flipped byte
+    let corrupt = copy("corrupt");
+    let mut bytes = std::fs::read(corrupt.join("weights.safetensors")).unwrap();
+    let k = bytes.len() - 100;
+    bytes[k] ^= 0x10;
+    std::fs::write(corrupt.join("weights.safetensors"), &bytes).unwrap();
+    let err = failure(
+        &[
+            "play",
+            "--checkpoint",
+            s(&corrupt),
+            "--phases",
+            "1",
+            "--rerun",
+            "off",
+        ],
+        1,
+    );
+    assert!(err.contains("checksum"), "{err}");
+    // garbage state file
+    let garbage = copy("garbage");
+    std::fs::write(garbage.join("state.toml"), "iteration = [").unwrap();
+    let err = failure(&["train", "--resume", s(&garbage), "--rerun", "off"], 1);
+    assert!(
+        err.contains("state.toml") && err.contains("not a valid state file"),
+        "{err}"
+    );
+    // a config whose observation does not fit the networks
+    let mismatched = copy("mismatched");
+    let text = std::fs::read_to_string(mismatched.join("config.toml")).unwrap();
+    std::fs::write(
+        mismatched.join("config.toml"),
+        text.replace("foot_history = true", "foot_history = false"),
+    )
+    .unwrap();
+    let err = failure(&["rollout", "--policy", s(&mismatched), "--phases", "1"], 1);
+    assert!(
+        err.contains("102 observations") && err.contains("66"),
+        "{err}"
+    );
+    // not a checkpoint at all
+    let err = failure(&["rollout", "--policy", s(&dir), "--phases", "1"], 1);
+    assert!(err.contains("not a checkpoint"), "{err}");
+    let err = failure(
+        &["train", "--resume", "/nonexistent/run", "--rerun", "off"],
+        1,
+    );
+    assert!(
+        err.contains("/nonexistent/run") && err.contains("no such"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_training_flags_are_refused() {
+    let err = failure(&["train", "--envs", "0", "--rerun", "off"], 2);
+    assert!(err.contains("--envs"), "{err}");
+    let err = failure(
+        &[
+            "train",
+            "--terrain",
+            "rigid",
+            "--envs",
+            "2",
+            "--rerun-envs",
+            "5",
+            "--rerun",
+            "off",
+        ],
+        1,
+    );
+    assert!(err.contains("rerun_envs holds 5"), "{err}");
+    let err = failure(&["train", "--resume", "x", "--envs", "2"], 2);
+    assert!(err.contains("--envs") && err.contains("--resume"), "{err}");
+    let err = failure(&["train", "--terrain", "elastic:5"], 1);
+    assert!(err.contains("elastic:5"), "{err}");
+}
+
+/// Starts a training run in the background with long iterations.
+fn start_long_run(run: &Path, config: &Path, envs: &[(&str, &str)]) -> Child {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_quadwalk"));
+    cmd.args([
+        "train",
+        "--config",
+        s(config),
+        "--run-dir",
+        s(run),
+        "--iterations",
+        "1000",
+        "--rerun",
+        "off",
+    ])
+    .stdout(Stdio::null())
+    .stderr(Stdio::piped());
+    for (k, v) in envs {
+        cmd.env(k, v);
+    }
+    cmd.spawn().unwrap()
+}
+
+fn wait_for(what: &str, timeout: Duration, mut ready: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !ready() {
+        assert!(start.elapsed() < timeout, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Sends a signal with the system's `kill` (std can only send SIGKILL).
+fn signal(child: &Child, name: &str) {
+    let status = Command::new("kill")
+        .args([&format!("-{name}"), &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+fn metrics_lines(run: &Path) -> usize {
+    std::fs::read_to_string(run.join("metrics.jsonl")).map_or(0, |t| t.lines().count())
+}
+
+#[test]
+fn ctrl_c_leaves_a_complete_checkpoint() {
+    let dir = scratch_dir("ctrl-c");
+    let config = dir.join("long.toml");
+    // checkpoints only every 1000 iterations: what is on disk after Ctrl-C
+    // was written by the Ctrl-C
+    std::fs::write(
+        &config,
+        TINY.replace("checkpoint_every = 1", "checkpoint_every = 1000"),
+    )
+    .unwrap();
+    let run = dir.join("run");
+    let child = start_long_run(&run, &config, &[]);
+    wait_for("two iterations", Duration::from_secs(120), || {
+        metrics_lines(&run) >= 2
+    });
+    signal(&child, "INT");
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("Ctrl-C") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    let done = metrics_lines(&run) as u64;
+    let state = std::fs::read_to_string(run.join("latest/state.toml")).unwrap();
+    assert!(
+        state.contains(&format!("iteration = {done}\n")),
+        "checkpoint is not at iteration {done}: {state}"
+    );
+    // it loads and the run goes on from it
+    ok(&[
+        "train",
+        "--resume",
+        s(&run),
+        "--iterations",
+        &(done + 1).to_string(),
+        "--rerun",
+        "off",
+    ]);
+    assert_eq!(metrics_lines(&run) as u64, done + 1);
+}
+
+#[test]
+fn a_kill_during_a_save_leaves_the_previous_checkpoint_intact() {
+    let dir = scratch_dir("kill");
+    let config = tiny_config(&dir);
+    let run = dir.join("run");
+    // every save pauses 2 s after its first file: kill inside the second save
+    let mut child = start_long_run(&run, &config, &[("QUADWALK_TEST_SAVE_PAUSE_MS", "2000")]);
+    let partial_of_second = || {
+        std::fs::read_dir(run.join("checkpoints")).is_ok_and(|entries| {
+            entries.flatten().any(|e| {
+                e.file_name()
+                    .to_string_lossy()
+                    .starts_with(".iter-000002.partial-")
+            })
+        })
+    };
+    wait_for(
+        "the second save",
+        Duration::from_secs(120),
+        partial_of_second,
+    );
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    assert!(
+        partial_of_second(),
+        "the kill should have left the half-written save"
+    );
+    assert!(!run.join("checkpoints/iter-000002").exists());
+    assert_eq!(
+        std::fs::read_link(run.join("latest")).unwrap(),
+        Path::new("checkpoints/iter-000001")
+    );
+    let r = json_of(&["rollout", "--policy", s(&run), "--phases", "1", "--json"]);
+    assert_eq!(r["phases"], 1);
+    // resuming starts from iteration 1 and clears the stray directory
+    ok(&[
+        "train",
+        "--resume",
+        s(&run),
+        "--iterations",
+        "2",
+        "--rerun",
+        "off",
+    ]);
+    assert!(!partial_of_second());
+    assert_eq!(
+        std::fs::read_link(run.join("latest")).unwrap(),
+        Path::new("checkpoints/iter-000002")
+    );
+}

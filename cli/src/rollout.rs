@@ -122,7 +122,7 @@ enum Policy {
         trainer: Box<learn::Trainer>,
         observation: robot::task::ObservationConfig,
         /// set: sample actions with this generator; unset: the mean action
-        sampler: Option<rand_chacha::ChaCha8Rng>,
+        sampler: Option<Box<rand_chacha::ChaCha8Rng>>,
     },
 }
 
@@ -164,7 +164,7 @@ impl Policy {
         Ok(Self::Trained {
             trainer: Box::new(trainer),
             observation,
-            sampler: sample_seed.map(rand::SeedableRng::seed_from_u64),
+            sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),
         })
     }
 

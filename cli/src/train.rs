@@ -149,9 +149,16 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
         // checkpoints/iter-N -> the run directory two levels up
         let run_dir = checkpoint
             .parent()
+            .filter(|p| p.file_name().is_some_and(|n| n == "checkpoints"))
             .and_then(Path::parent)
             .map(Path::to_path_buf)
-            .with_context(|| format!("{}: not inside a run directory", checkpoint.display()))?;
+            .with_context(|| {
+                format!(
+                    "--resume {}: the checkpoint is not inside a run directory (RUN/checkpoints/iter-N); \
+                     copy it there or train afresh",
+                    resume.display()
+                )
+            })?;
         if let Some(n) = args.iterations {
             if !experiment.curriculum.is_empty() {
                 bail!("--iterations cannot change a curriculum's length; edit its stages instead");

@@ -302,6 +302,10 @@ fn damaged_and_mismatched_checkpoints_give_clear_errors() {
     // not a checkpoint at all
     let err = failure(&["rollout", "--policy", s(&dir), "--phases", "1"], 1);
     assert!(err.contains("not a checkpoint"), "{err}");
+    // a sound checkpoint outside a run directory: resuming would not know where to write
+    let loose = copy("loose");
+    let err = failure(&["train", "--resume", s(&loose), "--rerun", "off"], 1);
+    assert!(err.contains("not inside a run directory"), "{err}");
     let err = failure(
         &["train", "--resume", "/nonexistent/run", "--rerun", "off"],
         1,

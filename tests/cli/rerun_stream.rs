@@ -52,6 +52,17 @@ fn scratch(name: &str) -> PathBuf {
     path
 }
 
+/// Runs `quadwalk ARGS`, which must succeed.
+fn quadwalk_ok(args: &[&str]) -> std::process::Output {
+    let out = super::quadwalk(args);
+    assert!(
+        out.status.success(),
+        "quadwalk {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// The strings of a JSON array.
 fn strings(list: &Value) -> Vec<&str> {
     list.as_array()
@@ -445,28 +456,19 @@ fn training_streams_rollouts_and_curves() {
 #[test]
 fn stand_streams_too() {
     let rrd = scratch("stand.rrd");
-    let out = Command::new(env!("CARGO_BIN_EXE_quadwalk"))
-        .args([
-            "stand",
-            "--terrain",
-            "elastic:5cm",
-            "--seconds",
-            "3",
-            "--json",
-        ])
-        .args([
-            "--rerun",
-            &format!("save:{}", rrd.display()),
-            "--rerun-rate",
-            "90",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let sink = format!("save:{}", rrd.display());
+    let out = quadwalk_ok(&[
+        "stand",
+        "--terrain",
+        "elastic:5cm",
+        "--seconds",
+        "3",
+        "--json",
+        "--rerun",
+        &sink,
+        "--rerun-rate",
+        "90",
+    ]);
     let report: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(report["rerun_frames"], 9, "{report}");
     let content = read_rrd(&rrd);
@@ -486,25 +488,23 @@ fn stand_streams_too() {
 #[test]
 fn bench_streams_its_phase_world() {
     let rrd = scratch("bench.rrd");
-    let out = Command::new(env!("CARGO_BIN_EXE_quadwalk"))
-        .args([
-            "bench",
-            "--terrain",
-            "rigid",
-            "--threads",
-            "1",
-            "--seconds",
-            "0.1",
-        ])
-        .args(["--repeat", "1", "--phases", "2", "--json"])
-        .args(["--rerun", &format!("save:{}", rrd.display())])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let sink = format!("save:{}", rrd.display());
+    let out = quadwalk_ok(&[
+        "bench",
+        "--terrain",
+        "rigid",
+        "--threads",
+        "1",
+        "--seconds",
+        "0.1",
+        "--repeat",
+        "1",
+        "--phases",
+        "2",
+        "--json",
+        "--rerun",
+        &sink,
+    ]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("include Rerun logging"));
     let content = read_rrd(&rrd);
     assert_eq!(content["phase_starts"], 2, "{content}");

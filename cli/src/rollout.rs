@@ -15,6 +15,20 @@ use viz::RerunSink;
 use crate::commands::{SceneArgs, make_world};
 use crate::viz_args::{RerunArgs, print_warnings};
 
+/// The flags `rollout` and `play` share with the same defaults.
+#[derive(Debug, Args)]
+struct RunFlags {
+    /// Seed: start position, the varying terrain's draw, and the samples of --stochastic
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Sample a trained policy's actions from its Gaussian instead of taking the mean
+    #[arg(long)]
+    stochastic: bool,
+    /// Print one JSON object instead of text
+    #[arg(long)]
+    json: bool,
+}
+
 /// Arguments of `quadwalk rollout`.
 #[derive(Debug, Args)]
 pub struct RolloutArgs {
@@ -27,15 +41,8 @@ pub struct RolloutArgs {
     /// Phases to run (0.75 s each), unless the episode terminates first
     #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     phases: u32,
-    /// Seed: start position, the varying terrain's draw, and the samples of --stochastic
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
-    /// Sample a trained policy's actions from its Gaussian instead of taking the mean
-    #[arg(long)]
-    stochastic: bool,
-    /// Print one JSON object instead of text
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    flags: RunFlags,
     #[command(flatten)]
     rerun: RerunArgs,
 }
@@ -55,15 +62,8 @@ pub struct PlayArgs {
     /// Phases to run (0.75 s each), unless the episode terminates first
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     phases: u32,
-    /// Seed: start position, the varying terrain's draw, and the samples of --stochastic
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
-    /// Sample a trained policy's actions from its Gaussian instead of taking the mean
-    #[arg(long)]
-    stochastic: bool,
-    /// Print one JSON object instead of text
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    flags: RunFlags,
     /// Rerun stream (default for play: spawn)
     #[command(flatten)]
     rerun: RerunArgs,
@@ -75,9 +75,7 @@ struct Run<'a> {
     policy: &'a str,
     scene: &'a SceneArgs,
     phases: u32,
-    seed: u64,
-    stochastic: bool,
-    json: bool,
+    flags: &'a RunFlags,
     rerun: &'a RerunArgs,
     default_sink: RerunSink,
 }
@@ -89,9 +87,7 @@ pub fn rollout(args: &RolloutArgs) -> Result<()> {
         policy: &args.policy,
         scene: &args.scene,
         phases: args.phases,
-        seed: args.seed,
-        stochastic: args.stochastic,
-        json: args.json,
+        flags: &args.flags,
         rerun: &args.rerun,
         default_sink: RerunSink::Off,
     })
@@ -105,9 +101,7 @@ pub fn play(args: &PlayArgs) -> Result<()> {
         policy: checkpoint.as_deref().unwrap_or(&args.policy),
         scene: &args.scene,
         phases: args.phases,
-        seed: args.seed,
-        stochastic: args.stochastic,
-        json: args.json,
+        flags: &args.flags,
         rerun: &args.rerun,
         default_sink: RerunSink::Spawn,
     })
@@ -194,22 +188,25 @@ fn stats(values: &[f64]) -> serde_json::Value {
 fn run(args: &Run) -> Result<()> {
     let experiment = args.scene.experiment()?;
     let (spec, mut task_config) = (experiment.terrain, experiment.task);
-    let mut policy = Policy::from_arg(args.policy, args.stochastic.then_some(args.seed))?;
+    let mut policy = Policy::from_arg(
+        args.policy,
+        args.flags.stochastic.then_some(args.flags.seed),
+    )?;
     if let Policy::Trained { observation, .. } = &policy {
         // the observation layout the policy was trained with
         task_config.observation = *observation;
     }
     task_config.max_phases = args.phases as usize;
     let model = args.scene.robot()?;
-    let world = make_world(&spec, model, args.seed, [0.0, 0.0])?;
-    let mut task = Task::new(world, task_config, args.seed);
+    let world = make_world(&spec, model, args.flags.seed, [0.0, 0.0])?;
+    let mut task = Task::new(world, task_config, args.flags.seed);
     let mut logger = args.rerun.open(
         args.default_sink.clone(),
         task.world().model(),
         Path::new(&format!("quadwalk-{}.rrd", args.command)),
         &format!(
             "{} {} on {spec} (seed {})",
-            args.command, args.policy, args.seed
+            args.command, args.policy, args.flags.seed
         ),
     )?;
     let mut obs = vec![0.0f32; task.observation_size()];
@@ -259,7 +256,7 @@ fn run(args: &Run) -> Result<()> {
         .map(|(n, v)| (n.to_string(), json!(v)))
         .collect();
     let height = stats(&heights);
-    if args.json {
+    if args.flags.json {
         let terminated = match &termination {
             None => json!(false),
             Some(t) => json!(t.kind()),
@@ -267,7 +264,7 @@ fn run(args: &Run) -> Result<()> {
         let out = json!({
             "policy": args.policy,
             "terrain": spec.to_string(),
-            "seed": args.seed,
+            "seed": args.flags.seed,
             "start_xy_m": start,
             "phases": phases,
             "sim_seconds": task.world().time_secs(),
@@ -289,7 +286,7 @@ fn run(args: &Run) -> Result<()> {
         out!(
             "policy          {} on {spec} (seed {})",
             args.policy,
-            args.seed
+            args.flags.seed
         );
         out!("start           x {:.2} m, y {:.2} m", start[0], start[1]);
         out!(

@@ -23,6 +23,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use learn::checkpoint::{
     point_latest, remove_partial_saves, resolve_checkpoint, write_dir_atomically,
+    write_file_atomically,
 };
 use learn::{IterationStats, Trainer};
 use serde_json::json;
@@ -269,7 +270,7 @@ pub fn train(args: &TrainArgs) -> Result<()> {
     remove_partial_saves(&run_dir);
     remove_partial_saves(&run_dir.join("checkpoints"));
     let config_text = experiment.to_toml();
-    write_atomically(&run_dir.join(CONFIG_FILE), config_text.as_bytes())?;
+    write_file_atomically(&run_dir.join(CONFIG_FILE), config_text.as_bytes())?;
     let metrics_path = run_dir.join(METRICS_FILE);
     keep_metrics_up_to(&metrics_path, start_iteration)?;
 
@@ -510,19 +511,6 @@ fn save_checkpoint(
     Ok(())
 }
 
-/// Writes a file by writing a sibling and renaming it over.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension(format!("partial-{}", std::process::id()));
-    let mut f =
-        fs::File::create(&tmp).with_context(|| format!("cannot write {}", tmp.display()))?;
-    f.write_all(bytes)
-        .with_context(|| format!("cannot write {}", tmp.display()))?;
-    f.sync_all()
-        .with_context(|| format!("cannot write {}", tmp.display()))?;
-    fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
-}
-
 fn append_line(path: &Path, line: &str) -> Result<()> {
     let mut f = fs::OpenOptions::new()
         .create(true)
@@ -548,7 +536,7 @@ fn keep_metrics_up_to(path: &Path, iteration: u64) -> Result<()> {
         })
         .map(|line| format!("{line}\n"))
         .collect();
-    write_atomically(path, kept.as_bytes())
+    Ok(write_file_atomically(path, kept.as_bytes())?)
 }
 
 #[cfg(test)]

@@ -293,6 +293,33 @@ pub fn resolve_checkpoint(path: &Path) -> Result<PathBuf, LearnError> {
     )))
 }
 
+/// Creates `path` holding `bytes`, flushed to disk.
+fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), LearnError> {
+    let io = |what: &str, e: std::io::Error| {
+        LearnError::Checkpoint(format!("{}: cannot {what}: {e}", path.display()))
+    };
+    let mut f = fs::File::create(path).map_err(|e| io("create", e))?;
+    f.write_all(bytes).map_err(|e| io("write", e))?;
+    f.sync_all().map_err(|e| io("flush", e))
+}
+
+/// Writes one file atomically: into a hidden sibling `.NAME.partial-PID`
+/// (which [`remove_partial_saves`] clears if a kill leaves it), flushed, then
+/// renamed over `path`.
+pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), LearnError> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| LearnError::Checkpoint(format!("{}: not a file name", path.display())))?;
+    let staging = path.with_file_name(format!(
+        ".{}.partial-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    write_synced(&staging, bytes)?;
+    fs::rename(&staging, path)
+        .map_err(|e| LearnError::Checkpoint(format!("{}: cannot replace it: {e}", path.display())))
+}
+
 /// Writes `files` into directory `target` atomically (see the module docs).
 /// A `target` that already exists is left as it is (checkpoints are named
 /// by iteration, so it holds the same content).
@@ -324,10 +351,7 @@ pub fn write_dir_atomically(target: &Path, files: &[(String, Vec<u8>)]) -> Resul
         .ok()
         .and_then(|v| v.parse().ok());
     for (k, (file, bytes)) in files.iter().enumerate() {
-        let path = staging.join(file);
-        let mut f = fs::File::create(&path).map_err(|e| io("create", &path, e))?;
-        f.write_all(bytes).map_err(|e| io("write", &path, e))?;
-        f.sync_all().map_err(|e| io("flush", &path, e))?;
+        write_synced(&staging.join(file), bytes)?;
         if k == 0
             && let Some(ms) = pause_ms
         {
@@ -502,6 +526,20 @@ mod tests {
         assert!(err.contains("nope") && err.contains("no such"), "{err}");
         let err = Trainer::load(tmp.path()).unwrap_err().to_string();
         assert!(err.contains("not a checkpoint"), "{err}");
+    }
+
+    #[test]
+    fn single_files_are_replaced_whole() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("config.toml");
+        write_file_atomically(&path, b"first").unwrap();
+        write_file_atomically(&path, b"second").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"second");
+        let names: Vec<String> = fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+            .collect();
+        assert_eq!(names, ["config.toml"], "no staging file is left");
     }
 
     #[test]

@@ -40,9 +40,9 @@ fn ok(args: &[&str]) -> String {
     stderr
 }
 
-/// `quadwalk train --config CONFIG --run-dir RUN --iterations N --rerun off`.
-fn train_tiny(config: &Path, run: &Path, iterations: &str) {
-    ok(&[
+/// `train --config CONFIG --run-dir RUN --iterations N --rerun off`.
+fn train_args<'a>(config: &'a Path, run: &'a Path, iterations: &'a str) -> [&'a str; 9] {
+    [
         "train",
         "--config",
         s(config),
@@ -52,7 +52,12 @@ fn train_tiny(config: &Path, run: &Path, iterations: &str) {
         iterations,
         "--rerun",
         "off",
-    ]);
+    ]
+}
+
+/// [`train_args`], which must succeed.
+fn train_tiny(config: &Path, run: &Path, iterations: &str) {
+    ok(&train_args(config, run, iterations));
 }
 
 /// The metrics lines without the fields that measure time.
@@ -344,19 +349,9 @@ fn bad_training_flags_are_refused() {
 /// Starts a training run in the background with long iterations.
 fn start_long_run(run: &Path, config: &Path, envs: &[(&str, &str)]) -> Child {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_quadwalk"));
-    cmd.args([
-        "train",
-        "--config",
-        s(config),
-        "--run-dir",
-        s(run),
-        "--iterations",
-        "1000",
-        "--rerun",
-        "off",
-    ])
-    .stdout(Stdio::null())
-    .stderr(Stdio::piped());
+    cmd.args(train_args(config, run, "1000"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
     for (k, v) in envs {
         cmd.env(k, v);
     }

@@ -184,7 +184,7 @@ fn measure_phases(
                     }
                 }
                 let start = Instant::now();
-                let action = crawl.action(task.phase());
+                let action = crawl.act(&task);
                 let outcome = match streamed.as_deref_mut() {
                     Some(l) => task.step_phase_observed(&action, &mut obs, l),
                     None => task.step_phase(&action, &mut obs),

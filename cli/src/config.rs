@@ -57,7 +57,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
 use learn::PpoConfig;
-use robot::task::{ObservationConfig, TaskConfig};
+use robot::task::{DistanceReward, ObservationConfig, TaskConfig};
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
 
@@ -262,7 +262,7 @@ impl Experiment {
         let t = &self.task;
         let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
             self.terrain.to_string(),
             t.goal_spacing_m,
             t.goal_reached_m,
@@ -275,6 +275,7 @@ impl Experiment {
             t.max_pitch_deg,
             t.termination_reward,
             t.settle_secs,
+            t.distance_reward.name(),
             o.foot_history,
             o.short_history,
             o.foot_velocity,
@@ -348,6 +349,7 @@ struct TaskSection {
     max_pitch_deg: Option<f64>,
     termination_reward: Option<f64>,
     settle_secs: Option<f64>,
+    distance_reward: Option<String>,
     observation: Option<ObservationSection>,
 }
 
@@ -409,6 +411,14 @@ impl TaskSection {
                 }
                 Some(v) => v,
                 None => d.settle_secs,
+            },
+            distance_reward: match self.distance_reward {
+                Some(name) => DistanceReward::from_name(&name).ok_or_else(|| {
+                    format!(
+                        "distance_reward must be \"new_ground\" or \"progress\" (the paper's), got {name:?}"
+                    )
+                })?,
+                None => d.distance_reward,
             },
             observation,
         })
@@ -486,11 +496,20 @@ mod tests {
     #[test]
     fn task_section_sets_the_task_and_refuses_unknown_keys() {
         let e = Experiment::from_toml(
-            "[terrain]\nspec = \"rigid\"\n[task]\nmax_phases = 12\n[task.observation]\nfoot_history = false\n",
+            "[terrain]\nspec = \"rigid\"\n[task]\nmax_phases = 12\ndistance_reward = \"new_ground\"\n[task.observation]\nfoot_history = false\n",
             "t.toml",
         )
         .unwrap();
         assert_eq!(e.task.max_phases, 12);
+        assert_eq!(e.task.distance_reward, DistanceReward::NewGround);
+        assert_eq!(
+            Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "t.toml")
+                .unwrap()
+                .task
+                .distance_reward,
+            DistanceReward::Progress,
+            "the paper's term by default"
+        );
         assert!(!e.task.observation.foot_history);
         assert_eq!(e.task.observation.size(), 102 - 36);
         for (text, expected) in [
@@ -514,6 +533,10 @@ mod tests {
                 "[terrain]\nspec = \"rigid\"\n[task.observation]\nfoot_speed = true\n",
                 "unknown field `foot_speed`",
             ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"forward\"\n",
+                "distance_reward must be \"new_ground\" or \"progress\" (the paper's), got \"forward\"",
+            ),
         ] {
             let err = format!("{:#}", Experiment::from_toml(text, "t.toml").unwrap_err());
             assert!(
@@ -525,7 +548,7 @@ mod tests {
 
     #[test]
     fn resolved_toml_parses_back_to_the_same_experiment() {
-        let text = "[[curriculum]]\nterrain = \"varying:2m:2,3,4,5cm,rigid\"\niterations = 3\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n[ppo]\nlearning_rate = 1e-3\ntarget_kl = 0.02\n[train]\nenvs = 4\nrerun_envs = [0, 3]\n[task]\nmax_phases = 12\n[task.observation]\nshort_history = false\n";
+        let text = "[[curriculum]]\nterrain = \"varying:2m:2,3,4,5cm,rigid\"\niterations = 3\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n[ppo]\nlearning_rate = 1e-3\ntarget_kl = 0.02\n[train]\nenvs = 4\nrerun_envs = [0, 3]\n[task]\nmax_phases = 12\ndistance_reward = \"new_ground\"\n[task.observation]\nshort_history = false\n";
         let e = Experiment::from_toml(text, "c.toml").unwrap();
         assert_eq!(e.total_iterations(), 5);
         assert_eq!(e.terrain.to_string(), "varying:2m:2cm,3cm,4cm,5cm,rigid");

@@ -164,7 +164,7 @@ impl Policy {
 
     fn action(&mut self, task: &Task, obs: &[f32]) -> Result<Vec<f32>> {
         Ok(match self {
-            Self::Scripted(crawl) => crawl.action(task.phase()).to_vec(),
+            Self::Scripted(crawl) => crawl.act(task).to_vec(),
             Self::Trained {
                 trainer,
                 sampler: Some(rng),

@@ -1,127 +1,190 @@
-//! A scripted crawl: a fixed, repeating sequence of four actions in the
-//! paper's action space that walks the robot forward.
+//! A scripted crawl: a statically stable walk written in the paper's action
+//! space, used as a baseline policy and for benchmarks.
 //!
-//! One cycle is four phases, swinging front-left, rear-right, front-right,
-//! rear-left. In every phase:
-//! - the base advances `stride_m` along x at a steady rate (control points
-//!   stride/3, 2 stride/3, stride);
-//! - on top of that the base makes a hump away from the swing foot, over the
-//!   triangle of the three stance feet, and is back on the centre line at the
-//!   phase end: P1 = P2 = hump, P3 = 0, so it peaks at 3/4 of the hump at
-//!   mid-phase. Front-leg swings hump backward (`hump_back_m`), rear-leg
-//!   swings forward (`hump_forward_m`), and sideways by `hump_side_m` away
-//!   from the swing foot's side;
-//! - the swing foot rises late (height control points 0, `lift_m`) and
-//!   lands `press_m` below its start height, so it loads the tile it lands
-//!   on; frontally it goes from `landing_ahead_m - 4 stride` (where a foot
-//!   that stood three phases is) to `landing_ahead_m` ahead of its squat
-//!   position; laterally it stays on the squat position.
+//! The paper's phases swing the legs in a fixed order (FL, RR, FR, RL), and
+//! its action cannot skip a phase. The crawl lets the swing foot of most
+//! phases stay on the ground ("shift" and "hold" phases) and lifts a foot in
+//! only four phases of a 16-phase cycle, one per leg:
 //!
-//! Every phase starts and ends with the base on the centre line, so the four
-//! actions repeat unchanged and the crawl does not look at the state.
+//! | phase in cycle | 0 1 | 2 | 3 4 | 5 | 6 ... 11 | 12 | 13 14 | 15 |
+//! | --- | --- | --- | --- | --- | --- | --- | --- | --- |
+//! | swing leg | FL RR | FR | RL FL | RR | ... | FL | RR FR | RL |
+//! | foot | down | **lifts** | down | **lifts** | down | **lifts** | down | **lifts** |
+//! | centre of mass goes to | FR's spot | held | RR's spot | held | FL's spot | held | RL's spot | held |
 //!
-//! | phase | swing | base hump x | base hump y |
-//! | --- | --- | --- | --- |
-//! | 0 | FL | -hump_back | -hump_side |
-//! | 1 | RR | +hump_forward | +hump_side |
-//! | 2 | FR | -hump_back | +hump_side |
-//! | 3 | RL | +hump_forward | -hump_side |
+//! Before a foot lifts, the base moves the centre of mass (COM) to the
+//! centroid of the other three feet, where each of them carries a third of
+//! the weight. On springy tiles this is what keeps the body level: with the
+//! COM anywhere else the three stance tiles sink unequally, the body tips
+//! toward the lifted corner and the "swing" foot stays loaded. The spot is
+//! `side_offset_m` to the side away from the lifting foot and
+//! `fore_aft_offset_m` away from its end (behind the centroid of all four
+//! feet for a front foot, ahead of it for a hind foot), measured from the
+//! centroid of the four feet. The lifts are grouped so that the COM crosses
+//! sides only while all four feet are down: the right feet lift with the COM
+//! on the left (FR then RR), the left feet with the COM on the right (FL then
+//! RL), and the sideways moves fit the action's bound on the last base
+//! control point ([-4, 8] cm per phase).
+//!
+//! A lifting foot rises `lift_m` straight up, moves to `step_m / 2` ahead of
+//! its place in the squat pattern around the current centroid of the feet,
+//! and comes down `press_m` below its start height (so that it loads the
+//! tile it lands on). Foot targets are clipped to the action's bounds.
+//!
+//! Every phase also levels the base: every orientation control point takes
+//! out `level_gain` of the roll and pitch at the phase start and `yaw_gain`
+//! of the yaw, and the height control points bring the mean hip height back
+//! to `base_height_target_m` by the phase end. Base moves are expressed in
+//! the base frame at the phase start, as the action defines them.
+//!
+//! Everything the crawl reads is the robot's own state: foot positions and
+//! base pose (in the observation) and the COM (from the model's link masses).
+
+use nalgebra::{Point3, Vector3};
 
 use crate::LegName;
 use crate::action::{ACTION_SIZE, bound};
-use crate::task::SWING_ORDER;
+use crate::task::{SWING_ORDER, Task};
+
+/// Phases per crawl cycle.
+pub const CYCLE_PHASES: usize = 16;
+/// The phases of a cycle whose swing foot lifts (FR, RR, FL, RL).
+pub const LIFT_PHASES: [usize; 4] = [2, 5, 12, 15];
 
 /// The crawl's settings, SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScriptedCrawl {
-    /// base travel per phase, m
-    pub stride_m: f64,
-    /// base hump backward while a front foot swings (control-point value), m
-    pub hump_back_m: f64,
-    /// base hump forward while a rear foot swings (control-point value), m
-    pub hump_forward_m: f64,
-    /// base hump sideways, away from the swing foot (control-point value), m
-    pub hump_side_m: f64,
-    /// base hump upward while the foot swings (control-point value), m
-    pub hump_up_m: f64,
-    /// net base rise per phase (last height control point), m: makes up
-    /// for the sag of the position-controlled legs
-    pub rise_m: f64,
-    /// base tilt hump that raises the swing foot's corner (roll and pitch control-point value), rad
-    pub tilt_rad: f64,
-    /// swing foot lift above its start height (control-point value), m
+    /// how far the COM goes to the side away from the lifting foot, m
+    pub side_offset_m: f64,
+    /// how far the COM goes away from the lifting foot's end (front or
+    /// hind), m
+    pub fore_aft_offset_m: f64,
+    /// how far a lifting foot lands ahead of its place in the squat pattern
+    /// around the centroid of the feet, times two, m
+    pub step_m: f64,
+    /// swing height above the foot's start height, m
     pub lift_m: f64,
-    /// the first height control point as a fraction of `lift_m` (0: the foot
-    /// rises late, 1: from the phase start)
-    pub lift_first_fraction: f64,
-    /// where the swing foot lands ahead of its squat position, m
-    pub landing_ahead_m: f64,
-    /// how far below its start height the swing foot is placed, m
+    /// how far below its start height the swing foot is put down, m
     pub press_m: f64,
+    /// the mean hip height the crawl holds, m
+    pub base_height_target_m: f64,
+    /// fraction of the height error taken out by the phase end
+    pub height_gain: f64,
+    /// fraction of the roll and pitch taken out by every orientation control
+    /// point
+    pub level_gain: f64,
+    /// fraction of the yaw taken out by every orientation control point
+    pub yaw_gain: f64,
 }
 
 impl Default for ScriptedCrawl {
     fn default() -> Self {
         Self {
-            stride_m: 0.05,
-            hump_back_m: 0.04,
-            hump_forward_m: 0.0,
-            hump_side_m: 0.04,
-            hump_up_m: 0.02,
-            rise_m: 0.003,
-            tilt_rad: 0.05,
-            lift_m: 0.15,
-            lift_first_fraction: 0.0,
-            landing_ahead_m: 0.125,
-            press_m: 0.01,
+            side_offset_m: 0.08,
+            fore_aft_offset_m: 0.05,
+            step_m: 0.25,
+            lift_m: 0.10,
+            press_m: 0.0,
+            base_height_target_m: 0.28,
+            height_gain: 1.0,
+            level_gain: 1.0,
+            yaw_gain: 0.5,
         }
     }
 }
 
-impl ScriptedCrawl {
-    /// The action for the `phase`-th phase of an episode (phase 0 swings FL).
-    pub fn action(&self, phase: usize) -> [f32; ACTION_SIZE] {
-        let swing = SWING_ORDER[phase % 4];
-        let hind = matches!(swing, LegName::RearLeft | LegName::RearRight);
-        let hump_x = if hind {
-            self.hump_forward_m
-        } else {
-            -self.hump_back_m
-        };
-        // Away from the swing foot's side: a left foot swings, the base goes right.
-        let hump_y = -swing.side_sign() * self.hump_side_m;
-        let d = self.stride_m;
-        let z = self.hump_up_m;
-        let base_points = [
-            [d / 3.0 + hump_x, hump_y, z],
-            [2.0 * d / 3.0 + hump_x, hump_y, z],
-            [d, 0.0, self.rise_m],
-        ];
-        // Raise the swing corner: roll up on the swing side, pitch the swing end up.
-        let roll = swing.side_sign() * self.tilt_rad;
-        let pitch = if hind { self.tilt_rad } else { -self.tilt_rad };
-        let tilt_points = [[roll, pitch], [roll, pitch], [0.0, 0.0]];
-        let first_lift = self.lift_first_fraction * self.lift_m;
-        let lift_points = [first_lift, self.lift_m, -self.press_m];
-        let shift = if hind {
-            crate::action::HIND_FRONTAL_SHIFT_M
-        } else {
-            0.0
-        };
-        let before = self.landing_ahead_m - 4.0 * d;
-        let frontal_points =
-            [before, self.landing_ahead_m, self.landing_ahead_m].map(|x| x + shift);
+/// Whether the swing foot of episode phase `phase` lifts.
+pub fn lifts_in_phase(phase: usize) -> bool {
+    LIFT_PHASES.contains(&(phase % CYCLE_PHASES))
+}
 
-        // Control-point values in SI (offsets as each bound defines them).
+fn is_hind(leg: LegName) -> bool {
+    matches!(leg, LegName::RearLeft | LegName::RearRight)
+}
+
+impl ScriptedCrawl {
+    /// Where the COM should be while `leg` is in the air, relative to the
+    /// centroid of the four feet (world x, y; the robot heading +x), m.
+    pub fn com_spot_m(&self, leg: LegName) -> [f64; 2] {
+        let fore_aft = if is_hind(leg) {
+            self.fore_aft_offset_m
+        } else {
+            -self.fore_aft_offset_m
+        };
+        [fore_aft, -leg.side_sign() * self.side_offset_m]
+    }
+
+    /// The crawl's action for the phase about to run on `task`.
+    pub fn act(&self, task: &Task) -> [f32; ACTION_SIZE] {
+        let world = task.world();
+        let phase = task.phase();
+        let swing = SWING_ORDER[phase % 4];
+        let hind = is_hind(swing);
+        let lift = lifts_in_phase(phase);
+        let base = world.base_pose();
+        let world_to_base = base.inverse();
+        let feet = world.feet_in_world_m();
+        let squat = task.squat_feet_in_base_m();
+        let centroid = |f: &[Vector3<f64>; 4]| f.iter().sum::<Vector3<f64>>() / 4.0;
+        let feet_centroid = centroid(&feet);
+        let squat_centroid = centroid(squat);
+
+        // The swing foot: now, and where it lands (base frame at the phase start).
+        let s = swing.index();
+        let foot_now = (world_to_base * Point3::from(feet[s])).coords;
+        let mut landing = foot_now;
+        if lift {
+            let pattern = base.rotation * (squat[s] - squat_centroid);
+            let target_world = Vector3::new(
+                feet_centroid.x + pattern.x + self.step_m / 2.0,
+                feet_centroid.y + pattern.y,
+                feet[s].z,
+            );
+            landing = (world_to_base * Point3::from(target_world)).coords;
+        }
+
+        // The COM spot for the next foot to lift (this one if it lifts).
+        let mut next = phase;
+        while !lifts_in_phase(next) {
+            next += 1;
+        }
+        let spot = self.com_spot_m(SWING_ORDER[next % 4]);
+        let com = world.centre_of_mass_m();
+        let shift_world = Vector3::new(
+            feet_centroid.x + spot[0] - com.x,
+            feet_centroid.y + spot[1] - com.y,
+            0.0,
+        );
+        let shift = base.rotation.inverse() * shift_world;
+        let (roll, pitch, yaw) = base.rotation.euler_angles();
+        let rise = self.height_gain * (self.base_height_target_m - world.base_height_m());
+
+        // Control-point values in SI, as the action's bounds define them.
         let mut si = [0.0f64; ACTION_SIZE];
         for p in 0..3 {
-            si[p * 3] = base_points[p][0];
-            si[p * 3 + 1] = base_points[p][1];
-            si[p * 3 + 2] = base_points[p][2];
-            si[9 + p * 3] = tilt_points[p][0];
-            si[9 + p * 3 + 1] = tilt_points[p][1];
-            si[18 + p * 3] = frontal_points[p];
-            si[18 + p * 3 + 2] = lift_points[p];
+            // Lifting: hold the spot reached before. Shifting: move steadily.
+            let fraction = if lift { 1.0 } else { (p + 1) as f64 / 3.0 };
+            si[p * 3] = fraction * shift.x;
+            si[p * 3 + 1] = fraction * shift.y;
+            si[p * 3 + 2] = (p + 1) as f64 / 3.0 * rise;
+            si[9 + p * 3] = -self.level_gain * roll;
+            si[9 + p * 3 + 1] = -self.level_gain * pitch;
+            si[9 + p * 3 + 2] = -self.yaw_gain * yaw;
+        }
+        let squat_foot = squat[s];
+        let foot_points = if lift {
+            [
+                [foot_now.x, foot_now.y, self.lift_m],
+                [landing.x, landing.y, self.lift_m],
+                [landing.x, landing.y, -self.press_m],
+            ]
+        } else {
+            [[foot_now.x, foot_now.y, 0.0]; 3]
+        };
+        for (p, point) in foot_points.iter().enumerate() {
+            si[18 + p * 3] = point[0] - squat_foot.x;
+            si[18 + p * 3 + 1] = point[1] - squat_foot.y;
+            si[18 + p * 3 + 2] = point[2];
         }
         let mut action = [0.0f32; ACTION_SIZE];
         for (i, a) in action.iter_mut().enumerate() {
@@ -135,23 +198,102 @@ impl ScriptedCrawl {
 mod tests {
     use super::*;
     use crate::action::curves_from_action;
-    use nalgebra::Vector3;
+    use crate::task::TaskConfig;
+    use crate::{RobotModel, World, WorldConfig};
+    use std::sync::Arc;
+
+    fn task_on(spec: &str) -> (Task, Vec<f32>) {
+        let model = Arc::new(RobotModel::laikago());
+        let ctx = terrain_plugins::BuildContext {
+            supported_mass_kg: model.total_mass_kg(),
+            gravity_m_per_s2: 9.81,
+            seed: 0,
+        };
+        let terrain = terrain_plugins::Registry::builtin()
+            .create(spec, &ctx)
+            .unwrap();
+        let world = World::new(model, terrain, WorldConfig::default(), [0.0, 0.0]).unwrap();
+        let mut task = Task::new(world, TaskConfig::default(), 0);
+        let mut obs = vec![0.0; task.observation_size()];
+        task.reset(&mut obs);
+        (task, obs)
+    }
 
     #[test]
-    fn the_crawl_maps_back_to_its_si_values() {
-        let crawl = ScriptedCrawl::default();
-        let squat = Vector3::new(-0.238, -0.2, -0.35);
-        let now = Vector3::new(-0.4, -0.2, -0.34);
-        let c = curves_from_action(&crawl.action(1), now, squat, true);
-        // RR phase: hump left (away from the right foot), steady stride, back on the centre line.
-        assert!((c.base_position.points[1] - Vector3::new(0.05 / 3.0, 0.04, 0.02)).norm() < 1e-6);
-        assert!((c.base_position.points[3] - Vector3::new(0.05, 0.0, 0.003)).norm() < 1e-6);
-        assert!((c.swing_foot.points[3].x - (squat.x + 0.125 - 0.02)).abs() < 1e-6);
-        assert!((c.swing_foot.points[3].z - (now.z - 0.01)).abs() < 1e-6);
-        assert!((c.swing_foot.points[2].z - (now.z + 0.15)).abs() < 1e-6);
-        // Every value inside [-1, 1] (no clipping of the script).
-        for phase in 0..4 {
-            assert!(crawl.action(phase).iter().all(|a| a.abs() <= 1.0));
+    fn each_leg_lifts_once_per_cycle_with_the_com_on_the_far_side() {
+        let lifted: Vec<LegName> = (0..CYCLE_PHASES)
+            .filter(|&k| lifts_in_phase(k))
+            .map(|k| SWING_ORDER[k % 4])
+            .collect();
+        assert_eq!(
+            lifted,
+            [
+                LegName::FrontRight,
+                LegName::RearRight,
+                LegName::FrontLeft,
+                LegName::RearLeft
+            ]
+        );
+        // No two lifts in a row: the foot just put down takes its load first.
+        for k in 0..CYCLE_PHASES {
+            assert!(!(lifts_in_phase(k) && lifts_in_phase(k + 1)), "phase {k}");
         }
+        let crawl = ScriptedCrawl::default();
+        for leg in lifted {
+            let [x, y] = crawl.com_spot_m(leg);
+            assert!(y * leg.side_sign() < 0.0, "{leg:?}: away from its side");
+            assert!(
+                x * if is_hind(leg) { 1.0 } else { -1.0 } > 0.0,
+                "{leg:?}: away from its end"
+            );
+        }
+    }
+
+    #[test]
+    fn a_lift_phase_raises_the_foot_and_a_shift_phase_keeps_it_down() {
+        let (mut task, mut obs) = task_on("rigid");
+        let crawl = ScriptedCrawl::default();
+        for phase in 0..3 {
+            let action = crawl.act(&task);
+            assert!(action.iter().all(|a| a.abs() <= 1.0));
+            let swing = task.swing_leg();
+            let feet = task.world().feet_in_world_m();
+            let base = task.world().base_pose();
+            let now = (base.inverse() * Point3::from(feet[swing.index()])).coords;
+            let squat = task.squat_feet_in_base_m()[swing.index()];
+            let curves = curves_from_action(&action, now, squat, is_hind(swing));
+            let top = curves.swing_foot.at(0.5);
+            let end = curves.swing_foot.at(1.0);
+            if lifts_in_phase(phase) {
+                // 3/4 of the lift at mid-phase (Bezier with P1 = P2 = lift), landing ahead
+                assert!(
+                    (top.z - now.z - 0.75 * crawl.lift_m).abs() < 0.01,
+                    "{top} {now}"
+                );
+                assert!(
+                    end.x > now.x + 0.05,
+                    "the foot steps forward: {end} from {now}"
+                );
+            } else {
+                assert!((top - now).norm() < 0.005 && (end - now).norm() < 0.005);
+            }
+            task.step_phase(&action, &mut obs);
+        }
+    }
+
+    #[test]
+    fn the_com_reaches_the_spot_before_the_first_lift() {
+        let (mut task, mut obs) = task_on("rigid");
+        let crawl = ScriptedCrawl::default();
+        for _ in 0..2 {
+            task.step_phase(&crawl.act(&task), &mut obs);
+        }
+        // Phase 2 lifts FR: the COM is at FR's spot within 1.5 cm.
+        let feet = task.world().feet_in_world_m();
+        let centroid = feet.iter().sum::<Vector3<f64>>() / 4.0;
+        let com = task.world().centre_of_mass_m();
+        let [x, y] = crawl.com_spot_m(LegName::FrontRight);
+        let error = ((com.x - centroid.x - x).powi(2) + (com.y - centroid.y - y).powi(2)).sqrt();
+        assert!(error < 0.015, "COM {:.3} from FR's spot", error);
     }
 }

@@ -331,6 +331,16 @@ impl World {
             .collect()
     }
 
+    /// The robot's centre of mass (all links), world frame, m.
+    pub fn centre_of_mass_m(&self) -> Vector3<f64> {
+        let (mut mass_kg, mut moment) = (0.0, Vector3::zeros());
+        for (body, pose) in self.model().bodies.iter().zip(self.body_poses()) {
+            mass_kg += body.mass_kg;
+            moment += body.mass_kg * (pose * nalgebra::Point3::from(body.com_in_body_m)).coords;
+        }
+        moment / mass_kg
+    }
+
     /// Foot (toe centre) positions in the world frame, per leg.
     pub fn feet_in_world_m(&self) -> [Vector3<f64>; 4] {
         self.model.legs.clone().map(|leg| {

@@ -149,7 +149,7 @@ fn simulated_frames(spec: &str, seed: u64, phases: usize, rate: viz::LogRate) ->
     recorder.record(&task);
     let crawl = robot::scripted::ScriptedCrawl::default();
     while !task.done() {
-        let action = crawl.action(task.phase());
+        let action = crawl.act(&task);
         task.step_phase_observed(&action, &mut obs, &mut recorder);
     }
     recorder.frames

@@ -12,19 +12,23 @@
 //! | foot | down | **lifts** | down | **lifts** | down | **lifts** | down | **lifts** |
 //! | centre of mass goes to | FR's spot | held | RR's spot | held | FL's spot | held | RL's spot | held |
 //!
-//! Before a foot lifts, the base moves the centre of mass (COM) to the
-//! centroid of the other three feet, where each of them carries a third of
-//! the weight. On springy tiles this is what keeps the body level: with the
-//! COM anywhere else the three stance tiles sink unequally, the body tips
-//! toward the lifted corner and the "swing" foot stays loaded. The spot is
-//! `side_offset_m` to the side away from the lifting foot and
+//! Before a foot lifts, the base moves the centre of mass (COM) toward the
+//! centroid of the other three feet, where each of them would carry a third
+//! of the weight. On springy tiles this is what keeps the body level: with
+//! the COM far from it the three stance tiles sink unequally, the body tips
+//! toward the lifted corner and the "swing" foot stays loaded (measured on
+//! 2 cm tiles as FR lifted with the COM 4 cm ahead of that centroid: roll
+//! 5.7 and pitch 4.6 degrees toward FR, and the foot never left its tile).
+//! The spot is `side_offset_m` to the side away from the lifting foot and
 //! `fore_aft_offset_m` away from its end (behind the centroid of all four
 //! feet for a front foot, ahead of it for a hind foot), measured from the
-//! centroid of the four feet. The lifts are grouped so that the COM crosses
-//! sides only while all four feet are down: the right feet lift with the COM
-//! on the left (FR then RR), the left feet with the COM on the right (FL then
-//! RL), and the sideways moves fit the action's bound on the last base
-//! control point ([-4, 8] cm per phase).
+//! centroid of the four feet; with the default squat the three-foot
+//! centroid is about 7 cm to the side and 7 cm fore or aft, and the defaults
+//! (8 and 5 cm) walked farthest on 2 cm tiles. The lifts are grouped so that
+//! the COM crosses sides only while all four feet are down: the right feet
+//! lift with the COM on the left (FR then RR), the left feet with the COM on
+//! the right (FL then RL), and the sideways moves fit the action's bound on
+//! the last base control point ([-4, 8] cm per phase).
 //!
 //! A lifting foot rises `lift_m` straight up, moves to `step_m / 2` ahead of
 //! its place in the squat pattern around the current centroid of the feet,

@@ -251,13 +251,13 @@ pub fn stand(args: &StandArgs) -> Result<()> {
     let rate = logger.settings().rate;
     let steps_per_phase = robot::action::SAMPLES_PER_PHASE;
     if logger.is_active() {
-        logger.log_snapshot(&world.snapshot(tiles_half_side_m, 0, [args.x, args.y]));
+        logger.log_snapshot(&world.snapshot(tiles_half_side_m, 0, None));
     }
     let report = robot::stand::stand_observed(&mut world, args.seconds, &mut |world, step| {
         let step_in_phase = (step as usize % steps_per_phase) + 1;
         if logger.is_active() && rate.logs_step(step_in_phase, steps_per_phase) {
             let phase = step as usize / steps_per_phase;
-            logger.log_snapshot(&world.snapshot(tiles_half_side_m, phase, [args.x, args.y]));
+            logger.log_snapshot(&world.snapshot(tiles_half_side_m, phase, None));
         }
     });
     logger.finish();

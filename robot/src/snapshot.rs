@@ -36,8 +36,9 @@ pub struct StepSnapshot {
     /// tiles whose centre lies in the square around the base that the caller
     /// asked for (empty on terrains without tiles)
     pub tiles: Vec<TileState>,
-    /// the current goal, x and y, m
-    pub goal_xy_m: [f64; 2],
+    /// the current goal, x and y, m (`None` where there is no task, e.g.
+    /// `stand`)
+    pub goal_xy_m: Option<[f64; 2]>,
 }
 
 /// What a phase is about to do: its three curves and where they are.

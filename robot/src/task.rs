@@ -685,7 +685,7 @@ impl Task {
         self.world.snapshot(
             tiles_half_side_m,
             self.episode.phase,
-            self.episode.goal_xy_m,
+            Some(self.episode.goal_xy_m),
         )
     }
 

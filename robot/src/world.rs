@@ -393,7 +393,7 @@ impl World {
         &self,
         tiles_half_side_m: f64,
         phase: usize,
-        goal_xy_m: [f64; 2],
+        goal_xy_m: Option<[f64; 2]>,
     ) -> crate::snapshot::StepSnapshot {
         let base = self.base_pose();
         let (roll, pitch, yaw) = base.rotation.euler_angles();

@@ -481,6 +481,10 @@ fn stand_streams_too() {
         .clone();
     let deepest = last.iter().map(|v| v.as_f64().unwrap()).fold(0.0, f64::max);
     assert!(deepest > 0.03, "no tile sank: {last:?}");
+    // standing has no goal, so none is drawn
+    let entities = strings(&content["entities"]);
+    assert!(entities.contains(&"/world/base/trajectory"), "{entities:?}");
+    assert!(!entities.contains(&"/world/goal"), "{entities:?}");
 }
 
 /// `bench --rerun` streams the world on thread 0 of the phase-rate

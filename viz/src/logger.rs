@@ -390,21 +390,24 @@ impl RolloutLogger {
         for (path, pose) in self.body_paths.iter().zip(&snap.body_poses) {
             results.push(rec.log(path.as_str(), &transform(pose)));
         }
-        let base = snap.body_poses[0].translation.vector;
-        self.trajectory_m.push(f32x3(&base));
+        let base = f32x3(&snap.body_poses[0].translation.vector);
+        push_spaced(&mut self.trajectory_m, base, TRAJECTORY_SPACING_M);
+        let strip = self.trajectory_m.iter().copied().chain([base]);
         results.push(rec.log(
             "world/base/trajectory",
-            &rerun::LineStrips3D::new([self.trajectory_m.clone()]).with_colors([[40, 120, 220]]),
+            &rerun::LineStrips3D::new([strip]).with_colors([[40, 120, 220]]),
         ));
-        results.push(
-            rec.log(
-                "world/goal",
-                &rerun::Points3D::new([[snap.goal_xy_m[0] as f32, snap.goal_xy_m[1] as f32, 0.0]])
-                    .with_radii([0.05])
-                    .with_colors([[230, 180, 0]])
-                    .with_labels(["goal"]),
-            ),
-        );
+        if let Some([x, y]) = snap.goal_xy_m {
+            results.push(
+                rec.log(
+                    "world/goal",
+                    &rerun::Points3D::new([[x as f32, y as f32, 0.0]])
+                        .with_radii([0.05])
+                        .with_colors([[230, 180, 0]])
+                        .with_labels(["goal"]),
+                ),
+            );
+        }
         // Tiles: the top face at -sink, 2 cm thick.
         let thickness = 0.02f32;
         let centres: Vec<[f32; 3]> = snap
@@ -574,6 +577,29 @@ fn path_part(name: &str) -> String {
         .collect()
 }
 
+/// The base trajectory keeps a point only where the base has moved this far
+/// from the last kept one (plus the current position at the end), so the
+/// strip re-sent every frame grows with the path walked, not with the
+/// frames logged.
+const TRAJECTORY_SPACING_M: f32 = 0.01;
+
+/// Appends `point` when it is at least `spacing_m` from the last point (or
+/// the first); returns whether it did.
+fn push_spaced(points: &mut Vec<[f32; 3]>, point: [f32; 3], spacing_m: f32) -> bool {
+    let far = points.last().is_none_or(|last| {
+        let d2: f32 = last
+            .iter()
+            .zip(&point)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum();
+        d2 >= spacing_m * spacing_m
+    });
+    if far {
+        points.push(point);
+    }
+    far
+}
+
 fn f32x3(v: &Vector3<f64>) -> [f32; 3] {
     [v.x as f32, v.y as f32, v.z as f32]
 }
@@ -631,6 +657,20 @@ fn probe(url: &str) -> Result<(), String> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_trajectory_keeps_points_a_centimetre_apart() {
+        let mut points = Vec::new();
+        assert!(super::push_spaced(&mut points, [0.0, 0.0, 0.3], 0.01));
+        assert!(!super::push_spaced(&mut points, [0.005, 0.0, 0.3], 0.01));
+        assert!(!super::push_spaced(&mut points, [0.0, 0.009, 0.3], 0.01));
+        assert!(super::push_spaced(&mut points, [0.0, 0.0, 0.311], 0.01));
+        // a robot standing for 1,000 frames adds nothing more
+        for _ in 0..1000 {
+            super::push_spaced(&mut points, [0.0, 0.0, 0.3105], 0.01);
+        }
+        assert_eq!(points.len(), 2);
+    }
+
     use std::path::PathBuf;
 
     use super::*;

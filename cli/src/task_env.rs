@@ -82,6 +82,9 @@ pub struct TaskEnv {
     obs_size: usize,
     pool: rayon::ThreadPool,
     interrupted: Arc<AtomicBool>,
+    /// the tasks were just built and never stepped (the first reset need
+    /// not build them again)
+    pristine: bool,
 }
 
 impl TaskEnv {
@@ -110,6 +113,7 @@ impl TaskEnv {
             terrain_seed: seed,
             pool,
             interrupted,
+            pristine: true,
         };
         env.tasks = env.build_tasks(envs)?;
         Ok(env)
@@ -190,9 +194,14 @@ impl VecEnv for TaskEnv {
 
     fn reset_all(&mut self, seed: u64, obs: &mut [f32]) {
         let o = self.obs_size;
-        self.tasks = self
-            .build_tasks(self.tasks.len())
-            .expect("worlds that were built once build again");
+        // A stepped rapier world keeps solver and contact state that a body
+        // reset does not clear; rebuilding makes every iteration (and a
+        // resumed run) start from the same worlds.
+        if !std::mem::replace(&mut self.pristine, false) {
+            self.tasks = self
+                .build_tasks(self.tasks.len())
+                .expect("worlds that were built once build again");
+        }
         self.pool.install(|| {
             self.tasks
                 .par_iter_mut()

@@ -28,6 +28,9 @@
 //! max_phases = 40
 //! goal_spacing_m = 2.0
 //! start_x_range_m = [-0.5, 0.5]
+//! distance_reward = "progress"   # the paper's; or "new_ground"
+//! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
+//!                                # action is a residual on the crawl (+27 observations)
 //!
 //! [task.observation]      # the paper's ablations
 //! foot_history = false    # drop the three previous phase-start foot positions (-36)
@@ -57,7 +60,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
 use learn::PpoConfig;
-use robot::task::{DistanceReward, ObservationConfig, TaskConfig};
+use robot::task::{ActionPrior, DistanceReward, ObservationConfig, TaskConfig};
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
 
@@ -262,7 +265,7 @@ impl Experiment {
         let t = &self.task;
         let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
             self.terrain.to_string(),
             t.goal_spacing_m,
             t.goal_reached_m,
@@ -276,6 +279,7 @@ impl Experiment {
             t.termination_reward,
             t.settle_secs,
             t.distance_reward.name(),
+            t.action_prior.name(),
             o.foot_history,
             o.short_history,
             o.foot_velocity,
@@ -350,6 +354,7 @@ struct TaskSection {
     termination_reward: Option<f64>,
     settle_secs: Option<f64>,
     distance_reward: Option<String>,
+    action_prior: Option<String>,
     observation: Option<ObservationSection>,
 }
 
@@ -419,6 +424,14 @@ impl TaskSection {
                     )
                 })?,
                 None => d.distance_reward,
+            },
+            action_prior: match self.action_prior {
+                Some(name) => ActionPrior::from_name(&name).ok_or_else(|| {
+                    format!(
+                        "action_prior must be \"none\" (the paper's) or \"scripted_crawl\", got {name:?}"
+                    )
+                })?,
+                None => d.action_prior,
             },
             observation,
         })
@@ -496,11 +509,13 @@ mod tests {
     #[test]
     fn task_section_sets_the_task_and_refuses_unknown_keys() {
         let e = Experiment::from_toml(
-            "[terrain]\nspec = \"rigid\"\n[task]\nmax_phases = 12\ndistance_reward = \"new_ground\"\n[task.observation]\nfoot_history = false\n",
+            "[terrain]\nspec = \"rigid\"\n[task]\nmax_phases = 12\ndistance_reward = \"new_ground\"\naction_prior = \"scripted_crawl\"\n[task.observation]\nfoot_history = false\n",
             "t.toml",
         )
         .unwrap();
         assert_eq!(e.task.max_phases, 12);
+        assert_eq!(e.task.action_prior, ActionPrior::ScriptedCrawl);
+        assert_eq!(e.task.observation_size(), 102 - 36 + 27);
         assert_eq!(e.task.distance_reward, DistanceReward::NewGround);
         assert_eq!(
             Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "t.toml")
@@ -509,6 +524,11 @@ mod tests {
                 .distance_reward,
             DistanceReward::Progress,
             "the paper's term by default"
+        );
+        assert_eq!(
+            TaskConfig::default().action_prior,
+            ActionPrior::None,
+            "the paper's action by default"
         );
         assert!(!e.task.observation.foot_history);
         assert_eq!(e.task.observation.size(), 102 - 36);
@@ -537,6 +557,10 @@ mod tests {
                 "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"forward\"\n",
                 "distance_reward must be \"new_ground\" or \"progress\" (the paper's), got \"forward\"",
             ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[task]\naction_prior = \"crawl\"\n",
+                "action_prior must be \"none\" (the paper's) or \"scripted_crawl\", got \"crawl\"",
+            ),
         ] {
             let err = format!("{:#}", Experiment::from_toml(text, "t.toml").unwrap_err());
             assert!(
@@ -548,7 +572,7 @@ mod tests {
 
     #[test]
     fn resolved_toml_parses_back_to_the_same_experiment() {
-        let text = "[[curriculum]]\nterrain = \"varying:2m:2,3,4,5cm,rigid\"\niterations = 3\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n[ppo]\nlearning_rate = 1e-3\ntarget_kl = 0.02\n[train]\nenvs = 4\nrerun_envs = [0, 3]\n[task]\nmax_phases = 12\ndistance_reward = \"new_ground\"\n[task.observation]\nshort_history = false\n";
+        let text = "[[curriculum]]\nterrain = \"varying:2m:2,3,4,5cm,rigid\"\niterations = 3\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n[ppo]\nlearning_rate = 1e-3\ntarget_kl = 0.02\n[train]\nenvs = 4\nrerun_envs = [0, 3]\n[task]\nmax_phases = 12\ndistance_reward = \"new_ground\"\naction_prior = \"scripted_crawl\"\n[task.observation]\nshort_history = false\n";
         let e = Experiment::from_toml(text, "c.toml").unwrap();
         assert_eq!(e.total_iterations(), 5);
         assert_eq!(e.terrain.to_string(), "varying:2m:2cm,3cm,4cm,5cm,rigid");

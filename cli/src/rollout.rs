@@ -8,7 +8,7 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use robot::scripted::ScriptedCrawl;
-use robot::task::{RewardTerms, Task};
+use robot::task::{ActionPrior, RewardTerms, Task};
 use serde_json::json;
 use viz::RerunSink;
 
@@ -114,7 +114,9 @@ enum Policy {
     /// a trained checkpoint, mean action
     Trained {
         trainer: Box<learn::Trainer>,
-        observation: robot::task::ObservationConfig,
+        /// the task settings the policy was trained with (its observation
+        /// layout and action prior)
+        task: robot::task::TaskConfig,
         /// set: sample actions with this generator; unset: the mean action
         sampler: Option<Box<rand_chacha::ChaCha8Rng>>,
     },
@@ -143,21 +145,21 @@ impl Policy {
         let trainer = learn::Trainer::load(&dir).with_context(|| format!("policy {arg}"))?;
         let config = crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE))
             .with_context(|| format!("policy {arg}"))?;
-        let observation = config.task.observation;
-        if trainer.policy.obs_size() != observation.size()
+        let task = config.task;
+        if trainer.policy.obs_size() != task.observation_size()
             || trainer.policy.action_size() != robot::action::ACTION_SIZE
         {
             bail!(
                 "policy {arg}: its networks take {} observations and give {} actions, but its config says {} and {}",
                 trainer.policy.obs_size(),
                 trainer.policy.action_size(),
-                observation.size(),
+                task.observation_size(),
                 robot::action::ACTION_SIZE
             );
         }
         Ok(Self::Trained {
             trainer: Box::new(trainer),
-            observation,
+            task,
             sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),
         })
     }
@@ -192,9 +194,17 @@ fn run(args: &Run) -> Result<()> {
         args.policy,
         args.flags.stochastic.then_some(args.flags.seed),
     )?;
-    if let Policy::Trained { observation, .. } = &policy {
-        // the observation layout the policy was trained with
-        task_config.observation = *observation;
+    match &policy {
+        Policy::Trained { task, .. } => {
+            // the observation layout and action prior the policy was trained with
+            task_config.observation = task.observation;
+            task_config.action_prior = task.action_prior;
+        }
+        Policy::Scripted(_) if task_config.action_prior != ActionPrior::None => bail!(
+            "--policy scripted runs the crawl itself; its config sets action_prior = {:?}, which adds the crawl to a trained policy's actions (use action_prior = \"none\")",
+            task_config.action_prior.name()
+        ),
+        Policy::Scripted(_) => {}
     }
     task_config.max_phases = args.phases as usize;
     let model = args.scene.robot()?;

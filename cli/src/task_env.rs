@@ -104,7 +104,7 @@ impl TaskEnv {
             .build()
             .context("cannot start the environment threads")?;
         let mut env = Self {
-            obs_size: task.observation.size(),
+            obs_size: task.observation_size(),
             loggers: (0..envs).map(|_| None).collect(),
             tasks: Vec::new(),
             terrain: terrain.clone(),

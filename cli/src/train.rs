@@ -208,7 +208,7 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
     }
     let trainer = Trainer::new(
         experiment.ppo.clone(),
-        experiment.task.observation.size(),
+        experiment.task.observation_size(),
         robot::action::ACTION_SIZE,
         experiment.train.seed,
     )?;

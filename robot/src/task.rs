@@ -27,6 +27,7 @@
 //! | goal azimuth phi_g = atan2(goal y, goal x) | 1 | rad | base |
 //! | goal position x, y | 2 | m | base |
 //! | phase: index of the phase about to run (0 FL, 1 RR, 2 FR, 3 RL) / 4 | 1 | - | - |
+//! | only with [`ActionPrior::ScriptedCrawl`]: the crawl's action for the phase about to run | 27 | action units | - |
 //!
 //! # Reward (per phase, summed)
 //! - R_d = alpha_d (|rho_prev| - |rho|): progress toward the goal since the
@@ -68,6 +69,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::action::{ACTION_SIZE, SAMPLES_PER_PHASE, curves_from_action};
 use crate::model::LegName;
+use crate::scripted::ScriptedCrawl;
 use crate::snapshot::{NoObserver, PhaseObserver, PhaseStart, StepSnapshot};
 use crate::world::{DT_SECS, World};
 
@@ -168,6 +170,44 @@ impl DistanceReward {
     }
 }
 
+/// What a policy's action is added to (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ActionPrior {
+    /// The paper's: the action is the phase's action.
+    #[default]
+    None,
+    /// The action is a residual on the scripted crawl's action, which also
+    /// ends the observation (27 more values).
+    ScriptedCrawl,
+}
+
+impl ActionPrior {
+    /// The name used in configuration files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::ScriptedCrawl => "scripted_crawl",
+        }
+    }
+
+    /// Parses [`Self::name`]'s output.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "none" => Some(Self::None),
+            "scripted_crawl" => Some(Self::ScriptedCrawl),
+            _ => None,
+        }
+    }
+
+    /// Observation values the prior adds (after the paper's blocks).
+    pub fn observation_size(&self) -> usize {
+        match self {
+            Self::None => 0,
+            Self::ScriptedCrawl => ACTION_SIZE,
+        }
+    }
+}
+
 /// Settings of the task.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TaskConfig {
@@ -194,6 +234,15 @@ pub struct TaskConfig {
     pub settle_secs: f64,
     /// which distance term R_d pays
     pub distance_reward: DistanceReward,
+    /// what the policy's action is added to
+    pub action_prior: ActionPrior,
+}
+
+impl TaskConfig {
+    /// Number of observation values: the switched-on blocks and the prior's.
+    pub fn observation_size(&self) -> usize {
+        self.observation.size() + self.action_prior.observation_size()
+    }
 }
 
 impl Default for TaskConfig {
@@ -210,6 +259,7 @@ impl Default for TaskConfig {
             observation: ObservationConfig::default(),
             settle_secs: 0.5,
             distance_reward: DistanceReward::default(),
+            action_prior: ActionPrior::default(),
         }
     }
 }
@@ -414,7 +464,16 @@ impl Task {
 
     /// Number of observation values.
     pub fn observation_size(&self) -> usize {
-        self.config.observation.size()
+        self.config.observation_size()
+    }
+
+    /// The action the prior gives for the phase about to run (zeros without
+    /// a prior).
+    pub fn prior_action(&self) -> [f32; ACTION_SIZE] {
+        match self.config.action_prior {
+            ActionPrior::None => [0.0; ACTION_SIZE],
+            ActionPrior::ScriptedCrawl => ScriptedCrawl::default().act(self),
+        }
     }
 
     /// The world.
@@ -542,6 +601,17 @@ impl Task {
             "an action has {ACTION_SIZE} values"
         );
         assert!(!self.episode.done, "reset the task after an episode ends");
+        let composed;
+        let action = match self.config.action_prior {
+            ActionPrior::None => action,
+            ActionPrior::ScriptedCrawl => {
+                let prior = self.prior_action();
+                composed = std::array::from_fn::<f32, ACTION_SIZE, _>(|i| {
+                    (prior[i] + action[i]).clamp(-1.0, 1.0)
+                });
+                &composed[..]
+            }
+        };
         let swing = self.swing_leg();
         let base_start = self.world.base_pose();
         let feet_world_start = self.world.feet_in_world_m();
@@ -797,6 +867,9 @@ impl Task {
         out.push(goal.x);
         out.push(goal.y);
         out.push((self.episode.phase % 4) as f64 / 4.0);
+        if self.config.action_prior != ActionPrior::None {
+            out.extend(self.prior_action().iter().map(|&a| f64::from(a)));
+        }
         debug_assert_eq!(out.len(), size);
         for (o, v) in obs.iter_mut().zip(out) {
             *o = v as f32;
@@ -812,7 +885,6 @@ mod tests {
     use terrain_plugins::{BuildContext, Registry};
 
     use super::*;
-    use crate::scripted::ScriptedCrawl;
     use crate::{RobotModel, WorldConfig};
 
     fn task_on(spec: &str, config: TaskConfig, seed: u64) -> Task {
@@ -1002,6 +1074,50 @@ mod tests {
             roll: 0.2,
         };
         assert!((terms.total() - 1.9).abs() < 1e-12);
+    }
+
+    #[test]
+    fn on_the_crawl_prior_a_zero_action_walks_the_crawl_and_a_residual_is_added() {
+        let prior = TaskConfig {
+            action_prior: ActionPrior::ScriptedCrawl,
+            ..TaskConfig::default()
+        };
+        let mut residual = task_on("elastic:2cm", prior, 3);
+        let mut plain = task_on("elastic:2cm", TaskConfig::default(), 3);
+        assert_eq!(residual.observation_size(), 102 + ACTION_SIZE);
+        let (mut obs_r, mut obs_p) = (vec![0.0; 102 + ACTION_SIZE], vec![0.0; 102]);
+        residual.reset(&mut obs_r);
+        plain.reset(&mut obs_p);
+        let crawl = ScriptedCrawl::default();
+        for phase in 0..6 {
+            // the paper's blocks, then the crawl's action for the coming phase
+            assert_eq!(&obs_r[..102], &obs_p[..], "phase {phase}");
+            let crawl_action = crawl.act(&plain);
+            assert_eq!(&obs_r[102..], &crawl_action[..], "phase {phase}");
+            // phases 0-2 a zero residual, then 0.3 on every value (clipped)
+            let r = if phase < 3 { 0.0 } else { 0.3 };
+            let composed: Vec<f32> = crawl_action
+                .iter()
+                .map(|a| (a + r).clamp(-1.0, 1.0))
+                .collect();
+            let out_r = residual.step_phase(&[r; ACTION_SIZE], &mut obs_r);
+            let out_p = plain.step_phase(&composed, &mut obs_p);
+            assert_eq!(out_r.reward, out_p.reward, "phase {phase}");
+            assert_eq!(
+                residual.world().base_pose(),
+                plain.world().base_pose(),
+                "phase {phase}"
+            );
+        }
+        assert_eq!(
+            ActionPrior::from_name("scripted_crawl"),
+            Some(ActionPrior::ScriptedCrawl)
+        );
+        assert_eq!(
+            ActionPrior::from_name(ActionPrior::None.name()),
+            Some(ActionPrior::None)
+        );
+        assert_eq!(ActionPrior::from_name("crawl"), None);
     }
 
     #[test]

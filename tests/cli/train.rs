@@ -28,6 +28,14 @@ fn tiny_config(dir: &Path) -> PathBuf {
     path
 }
 
+/// [`TINY`] with `from` replaced by `to`, written to `dir/variant.toml`.
+fn tiny_variant(dir: &Path, from: &str, to: &str) -> PathBuf {
+    assert!(TINY.contains(from), "{from:?} is not in the tiny config");
+    let path = dir.join("variant.toml");
+    std::fs::write(&path, TINY.replace(from, to)).unwrap();
+    path
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -236,6 +244,60 @@ fn trained_checkpoints_play_and_roll_out() {
 }
 
 #[test]
+fn a_residual_policy_on_the_crawl_trains_and_rolls_out() {
+    let dir = scratch_dir("residual");
+    let config = tiny_variant(
+        &dir,
+        "[task]\n",
+        "[task]\naction_prior = \"scripted_crawl\"\n",
+    );
+    let run = dir.join("run");
+    train_tiny(&config, &run, "1");
+    let resolved = std::fs::read_to_string(run.join("latest/config.toml")).unwrap();
+    assert!(
+        resolved.contains("action_prior = \"scripted_crawl\""),
+        "{resolved}"
+    );
+    // the networks take the paper's 102 values and the crawl's 27
+    let weights = weights(&run);
+    let header_len = u64::from_le_bytes(weights[..8].try_into().unwrap()) as usize;
+    let header: Value = serde_json::from_slice(&weights[8..8 + header_len]).unwrap();
+    assert_eq!(
+        header["actor.0.weight"]["shape"],
+        serde_json::json!([129, 16]),
+        "{header}"
+    );
+    let r = json_of(&[
+        "rollout",
+        "--policy",
+        s(&run),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "4",
+        "--json",
+    ]);
+    assert_eq!(r["phases"], 4, "{r}");
+    // the crawl itself cannot run on top of the crawl
+    let err = failure(
+        &[
+            "rollout",
+            "--policy",
+            "scripted",
+            "--config",
+            s(&config),
+            "--phases",
+            "1",
+        ],
+        1,
+    );
+    assert!(
+        err.contains("--policy scripted runs the crawl itself") && err.contains("action_prior"),
+        "{err}"
+    );
+}
+
+#[test]
 fn damaged_and_mismatched_checkpoints_give_clear_errors() {
     let dir = scratch_dir("damaged");
     let config = tiny_config(&dir);
@@ -382,14 +444,9 @@ fn metrics_lines(run: &Path) -> usize {
 #[test]
 fn ctrl_c_leaves_a_complete_checkpoint() {
     let dir = scratch_dir("ctrl-c");
-    let config = dir.join("long.toml");
     // checkpoints only every 1000 iterations: what is on disk after Ctrl-C
     // was written by the Ctrl-C
-    std::fs::write(
-        &config,
-        TINY.replace("checkpoint_every = 1", "checkpoint_every = 1000"),
-    )
-    .unwrap();
+    let config = tiny_variant(&dir, "checkpoint_every = 1", "checkpoint_every = 1000");
     let run = dir.join("run");
     let child = start_long_run(&run, &config, &[]);
     wait_for("two iterations", Duration::from_secs(120), || {

@@ -106,6 +106,11 @@ impl LegName {
             Self::FrontRight | Self::RearRight => -1.0,
         }
     }
+
+    /// Whether this is a hind (rear) leg.
+    pub fn is_hind(self) -> bool {
+        matches!(self, Self::RearLeft | Self::RearRight)
+    }
 }
 
 /// A collision shape's geometry, metres.

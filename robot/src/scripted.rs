@@ -102,15 +102,11 @@ pub fn lifts_in_phase(phase: usize) -> bool {
     LIFT_PHASES.contains(&(phase % CYCLE_PHASES))
 }
 
-fn is_hind(leg: LegName) -> bool {
-    matches!(leg, LegName::RearLeft | LegName::RearRight)
-}
-
 impl ScriptedCrawl {
     /// Where the COM should be while `leg` is in the air, relative to the
     /// centroid of the four feet (world x, y; the robot heading +x), m.
     pub fn com_spot_m(&self, leg: LegName) -> [f64; 2] {
-        let fore_aft = if is_hind(leg) {
+        let fore_aft = if leg.is_hind() {
             self.fore_aft_offset_m
         } else {
             -self.fore_aft_offset_m
@@ -123,7 +119,7 @@ impl ScriptedCrawl {
         let world = task.world();
         let phase = task.phase();
         let swing = SWING_ORDER[phase % 4];
-        let hind = is_hind(swing);
+        let hind = swing.is_hind();
         let lift = lifts_in_phase(phase);
         let base = world.base_pose();
         let world_to_base = base.inverse();
@@ -247,7 +243,7 @@ mod tests {
             let [x, y] = crawl.com_spot_m(leg);
             assert!(y * leg.side_sign() < 0.0, "{leg:?}: away from its side");
             assert!(
-                x * if is_hind(leg) { 1.0 } else { -1.0 } > 0.0,
+                x * if leg.is_hind() { 1.0 } else { -1.0 } > 0.0,
                 "{leg:?}: away from its end"
             );
         }
@@ -265,7 +261,7 @@ mod tests {
             let base = task.world().base_pose();
             let now = (base.inverse() * Point3::from(feet[swing.index()])).coords;
             let squat = task.squat_feet_in_base_m()[swing.index()];
-            let curves = curves_from_action(&action, now, squat, is_hind(swing));
+            let curves = curves_from_action(&action, now, squat, swing.is_hind());
             let top = curves.swing_foot.at(0.5);
             let end = curves.swing_foot.at(1.0);
             if lifts_in_phase(phase) {

@@ -616,7 +616,7 @@ impl Task {
         let base_start = self.world.base_pose();
         let feet_world_start = self.world.feet_in_world_m();
         let feet_base_start = self.feet_in_base();
-        let hind = matches!(swing, LegName::RearLeft | LegName::RearRight);
+        let hind = swing.is_hind();
         let curves = curves_from_action(
             action,
             feet_base_start[swing.index()],

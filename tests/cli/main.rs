@@ -32,6 +32,16 @@ fn json_of(args: &[&str]) -> Value {
     })
 }
 
+/// Writes `text` to a file called `name` in this binary's scratch directory
+/// (in the target's temporary space) and returns its path.
+fn scratch_file(name: &str, text: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("e2e");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
 /// Runs a command that must fail; returns its stderr.
 fn failure(args: &[&str], code: i32) -> String {
     let out = quadwalk(args);
@@ -237,21 +247,15 @@ fn bad_input_gives_one_line_errors_and_no_panic() {
 
 #[test]
 fn malformed_urdf_is_refused_with_its_path() {
-    let dir = std::env::temp_dir().join(format!("quadwalk-e2e-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let broken = dir.join("broken.urdf");
-    std::fs::write(&broken, "<robot name='x'><link name='a'>").unwrap();
+    let broken = scratch_file("broken.urdf", "<robot name='x'><link name='a'>");
     let stderr = failure(&["stand", "--robot", broken.to_str().unwrap()], 1);
     assert!(stderr.contains("broken.urdf: not valid URDF"), "{stderr}");
-    let three_legs = dir.join("three_legs.urdf");
-    let text = robot_urdf_without_leg("RL");
-    std::fs::write(&three_legs, text).unwrap();
+    let three_legs = scratch_file("three_legs.urdf", &robot_urdf_without_leg("RL"));
     let stderr = failure(&["stand", "--robot", three_legs.to_str().unwrap()], 1);
     assert!(
         stderr.contains("three_legs.urdf") && stderr.contains("actuated joints"),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// The built-in URDF with one leg's joints and links removed.
@@ -306,14 +310,10 @@ fn third_party_urdf_stands_on_rigid_ground() {
 
 #[test]
 fn stand_reads_the_terrain_from_a_toml_file() {
-    let dir = std::env::temp_dir().join(format!("quadwalk-e2e-toml-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let good = dir.join("stand.toml");
-    std::fs::write(
-        &good,
+    let good = scratch_file(
+        "stand.toml",
         "[terrain]\nplugin = \"elastic\"\ndepth = \"2cm\"\nlength = \"3m\"\nback = \"1.5m\"\n",
-    )
-    .unwrap();
+    );
     let r = json_of(&[
         "stand",
         "--config",
@@ -324,12 +324,10 @@ fn stand_reads_the_terrain_from_a_toml_file() {
     ]);
     assert_eq!(r["terrain"], "elastic:2cm:length=3m:back=1.5m", "{r}");
     assert!((f(&r, "mean_loaded_sink_m") - 0.02).abs() < 0.002, "{r}");
-    let bad = dir.join("bad.toml");
-    std::fs::write(
-        &bad,
+    let bad = scratch_file(
+        "bad.toml",
         "[terrain]\nspec = \"elastic:2cm\"\ncolour = \"red\"\n",
-    )
-    .unwrap();
+    );
     let stderr = failure(&["stand", "--config", bad.to_str().unwrap()], 1);
     assert!(
         stderr.contains("bad.toml [terrain]") && stderr.contains("colour"),
@@ -346,7 +344,6 @@ fn stand_reads_the_terrain_from_a_toml_file() {
         2,
     );
     assert!(stderr.contains("cannot be used with"), "{stderr}");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -412,14 +409,10 @@ fn the_scripted_crawl_walks_four_metres_on_2cm_tiles() {
 fn rollout_reports_termination_and_refuses_unknown_policies() {
     // A termination is reported, not an error: with a pitch limit of 0.5
     // degrees the crawl's first steps end the episode.
-    let dir = std::env::temp_dir().join(format!("quadwalk-e2e-term-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let config = dir.join("strict.toml");
-    std::fs::write(
-        &config,
+    let config = scratch_file(
+        "strict.toml",
         "[terrain]\nspec = \"elastic:5cm\"\n[task]\nmax_pitch_deg = 0.5\n",
-    )
-    .unwrap();
+    );
     let r = json_of(&[
         "rollout",
         "--config",

@@ -114,10 +114,11 @@ fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement>
     let model = load_robot(None)?;
     let steps = (seconds / robot::DT_SECS).round().max(1.0) as u64;
     let settle_steps = 240;
+    let physics = robot::WorldConfig::default();
     let runs = on_each_thread(
         threads,
         |_| {
-            let mut world = make_world(&spec, model.clone(), 0, [0.0, 0.0])?;
+            let mut world = make_world(&spec, model.clone(), 0, [0.0, 0.0], &physics)?;
             for _ in 0..settle_steps {
                 world.step();
             }
@@ -154,10 +155,11 @@ fn measure_phases(
 ) -> Result<f64> {
     let spec = parse_spec(spec)?;
     let model = load_robot(None)?;
+    let physics = robot::WorldConfig::default();
     let timed = on_each_thread(
         threads,
         |t| {
-            let world = make_world(&spec, model.clone(), t as u64, [0.0, 0.0])?;
+            let world = make_world(&spec, model.clone(), t as u64, [0.0, 0.0], &physics)?;
             let mut task = Task::new(world, TaskConfig::default(), t as u64);
             let mut obs = vec![0.0f32; task.observation_size()];
             task.reset(&mut obs);

@@ -47,12 +47,14 @@ pub fn parse_spec(spec: &str) -> Result<TerrainSpec> {
     Ok(Registry::builtin().parse(spec)?)
 }
 
-/// Builds one world: terrain from `spec`, robot standing at (x, y).
+/// Builds one world: terrain from `spec`, robot standing at (x, y),
+/// simulated with `physics`.
 pub fn make_world(
     spec: &TerrainSpec,
     model: Arc<RobotModel>,
     seed: u64,
     xy_m: [f64; 2],
+    physics: &WorldConfig,
 ) -> Result<World> {
     let ctx = BuildContext {
         supported_mass_kg: model.total_mass_kg(),
@@ -72,7 +74,7 @@ pub fn make_world(
             extent.max_m[1]
         );
     }
-    World::new(model, terrain, WorldConfig::default(), xy_m)
+    World::new(model, terrain, physics.clone(), xy_m)
         .with_context(|| format!("cannot place the robot on {spec}"))
 }
 
@@ -237,9 +239,10 @@ pub struct StandArgs {
 }
 
 pub fn stand(args: &StandArgs) -> Result<()> {
-    let spec = args.scene.experiment()?.terrain;
+    let experiment = args.scene.experiment()?;
+    let (spec, physics) = (experiment.terrain, experiment.physics);
     let model = args.scene.robot()?;
-    let mut world = make_world(&spec, model.clone(), args.seed, [args.x, args.y])?;
+    let mut world = make_world(&spec, model.clone(), args.seed, [args.x, args.y], &physics)?;
     let mut logger = args.rerun.open(
         viz::RerunSink::Off,
         &model,

@@ -1,5 +1,5 @@
-//! Experiment files in TOML: `[terrain]`, `[task]`, `[ppo]`, `[train]` and
-//! `[[curriculum]]`. Every section but the terrain is optional (defaults
+//! Experiment files in TOML: `[terrain]`, `[task]`, `[physics]`, `[ppo]`,
+//! `[train]` and `[[curriculum]]`. Every section but the terrain is optional (defaults
 //! where silent); unknown keys are errors.
 //!
 //! ```toml
@@ -38,6 +38,17 @@
 //! foot_velocity = true    # foot velocities (12)
 //! ```
 //!
+//! ```toml
+//! [physics]               # robot::WorldConfig; these are the defaults
+//! pd = "implicit_spring"  # or "motor": a rapier motor constraint per joint
+//! substeps = 1            # rapier num_solver_iterations
+//! pgs_iterations = 4      # rapier num_internal_pgs_iterations
+//! ccd = true
+//! kp_n_m_per_rad = 600.0
+//! kd_n_m_s_per_rad = 8.0
+//! friction = 1.0          # of the robot's colliders
+//! ```
+//!
 //! The terrain is given either as a spec string or as a table whose keys are
 //! the plugin's parameters; both go through the same registry validation:
 //!
@@ -61,11 +72,12 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 use learn::PpoConfig;
 use robot::task::{ActionPrior, DistanceReward, ObservationConfig, TaskConfig};
+use robot::{PdModel, WorldConfig};
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
 
 /// The sections an experiment file may have.
-const KNOWN_SECTIONS: [&str; 5] = ["terrain", "task", "ppo", "train", "curriculum"];
+const KNOWN_SECTIONS: [&str; 6] = ["terrain", "task", "physics", "ppo", "train", "curriculum"];
 
 /// A parsed experiment file.
 #[derive(Debug, Clone, PartialEq)]
@@ -74,6 +86,8 @@ pub struct Experiment {
     pub terrain: TerrainSpec,
     /// the task settings (defaults where the file is silent)
     pub task: TaskConfig,
+    /// how the world is simulated (defaults where the file is silent)
+    pub physics: WorldConfig,
     /// PPO settings
     pub ppo: PpoConfig,
     /// the training run's settings
@@ -214,9 +228,22 @@ impl Experiment {
                     .map_err(|e| anyhow!("config {source} [task]: {e}"))?
             }
         };
+        let physics = match doc.get("physics") {
+            None => WorldConfig::default(),
+            Some(value) => {
+                let section: PhysicsSection =
+                    value.clone().try_into().map_err(|e: toml::de::Error| {
+                        anyhow!("config {source} [physics]: {}", e.message())
+                    })?;
+                section
+                    .resolve()
+                    .map_err(|e| anyhow!("config {source} [physics]: {e}"))?
+            }
+        };
         Ok(Self {
             terrain,
             task,
+            physics,
             ppo,
             train,
             curriculum,
@@ -229,6 +256,7 @@ impl Experiment {
         Self {
             terrain,
             task: TaskConfig::default(),
+            physics: WorldConfig::default(),
             ppo: PpoConfig::default(),
             train: TrainSettings::default(),
             curriculum: Vec::new(),
@@ -284,6 +312,17 @@ impl Experiment {
             o.short_history,
             o.foot_velocity,
         );
+        let p = &self.physics;
+        text.push_str(&format!(
+            "[physics]\npd = {:?}\nsubsteps = {}\npgs_iterations = {}\nccd = {}\nkp_n_m_per_rad = {:?}\nkd_n_m_s_per_rad = {:?}\nfriction = {:?}\n\n",
+            p.pd.name(),
+            p.solver_iterations,
+            p.pgs_iterations,
+            p.ccd,
+            p.kp_n_m_per_rad,
+            p.kd_n_m_s_per_rad,
+            p.friction,
+        ));
         let mut tables = toml::Table::new();
         tables.insert(
             "ppo".into(),
@@ -438,6 +477,60 @@ impl TaskSection {
     }
 }
 
+/// `[physics]`: every key optional, defaults from [`WorldConfig::default`].
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PhysicsSection {
+    pd: Option<String>,
+    substeps: Option<usize>,
+    pgs_iterations: Option<usize>,
+    ccd: Option<bool>,
+    kp_n_m_per_rad: Option<f64>,
+    kd_n_m_s_per_rad: Option<f64>,
+    friction: Option<f64>,
+}
+
+impl PhysicsSection {
+    fn resolve(self) -> Result<WorldConfig, String> {
+        let d = WorldConfig::default();
+        let count = |name: &str, v: Option<usize>, default: usize| match v {
+            Some(v) if !(1..=64).contains(&v) => Err(format!("{name} must be in 1..=64, got {v}")),
+            Some(v) => Ok(v),
+            None => Ok(default),
+        };
+        let at_least = |name: &str, v: Option<f64>, low: f64, default: f64| match v {
+            Some(v) if !(v.is_finite() && v >= low) => {
+                Err(format!("{name} must be a finite number >= {low}, got {v}"))
+            }
+            Some(v) => Ok(v),
+            None => Ok(default),
+        };
+        let kp = at_least("kp_n_m_per_rad", self.kp_n_m_per_rad, 0.0, d.kp_n_m_per_rad)?;
+        if kp == 0.0 {
+            return Err("kp_n_m_per_rad must be positive, got 0".into());
+        }
+        Ok(WorldConfig {
+            kp_n_m_per_rad: kp,
+            kd_n_m_s_per_rad: at_least(
+                "kd_n_m_s_per_rad",
+                self.kd_n_m_s_per_rad,
+                0.0,
+                d.kd_n_m_s_per_rad,
+            )?,
+            pd: match self.pd {
+                Some(name) => PdModel::from_name(&name).ok_or_else(|| {
+                    format!("pd must be \"implicit_spring\" or \"motor\", got {name:?}")
+                })?,
+                None => d.pd,
+            },
+            solver_iterations: count("substeps", self.substeps, d.solver_iterations)?,
+            pgs_iterations: count("pgs_iterations", self.pgs_iterations, d.pgs_iterations)?,
+            ccd: self.ccd.unwrap_or(d.ccd),
+            friction: at_least("friction", self.friction, 0.0, d.friction)?,
+        })
+    }
+}
+
 /// Reads the `[terrain]` section of a parsed file; `source` names it in errors.
 fn terrain_from_table(doc: &toml::Table, source: &str) -> Result<TerrainSpec> {
     let section = doc
@@ -583,6 +676,61 @@ mod tests {
         assert_eq!(back, e);
         let plain = Experiment::for_terrain(Registry::builtin().parse("rigid").unwrap());
         assert_eq!(Experiment::from_toml(&plain.to_toml(), "r").unwrap(), plain);
+    }
+
+    #[test]
+    fn physics_section_sets_the_world_and_round_trips() {
+        let e = Experiment::from_toml(
+            "[terrain]\nspec = \"rigid\"\n[physics]\npd = \"motor\"\nsubsteps = 4\npgs_iterations = 1\nccd = false\nkd_n_m_s_per_rad = 5.0\n",
+            "p.toml",
+        )
+        .unwrap();
+        assert_eq!(e.physics.pd, PdModel::Motor);
+        assert_eq!(e.physics.solver_iterations, 4);
+        assert_eq!(e.physics.pgs_iterations, 1);
+        assert!(!e.physics.ccd);
+        assert_eq!(e.physics.kd_n_m_s_per_rad, 5.0);
+        assert_eq!(
+            e.physics.kp_n_m_per_rad,
+            WorldConfig::default().kp_n_m_per_rad
+        );
+        assert_eq!(Experiment::from_toml(&e.to_toml(), "resolved").unwrap(), e);
+        let plain = Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "p.toml").unwrap();
+        assert_eq!(plain.physics, WorldConfig::default());
+        for (text, expected) in [
+            (
+                "[physics]\npd = \"pid\"\n",
+                "pd must be \"implicit_spring\" or \"motor\", got \"pid\"",
+            ),
+            (
+                "[physics]\nsubsteps = 0\n",
+                "substeps must be in 1..=64, got 0",
+            ),
+            (
+                "[physics]\npgs_iterations = 100\n",
+                "pgs_iterations must be in 1..=64",
+            ),
+            (
+                "[physics]\nkp_n_m_per_rad = 0.0\n",
+                "kp_n_m_per_rad must be positive",
+            ),
+            (
+                "[physics]\nkd_n_m_s_per_rad = -1.0\n",
+                "kd_n_m_s_per_rad must be a finite number >= 0",
+            ),
+            (
+                "[physics]\nfriction = nan\n",
+                "friction must be a finite number >= 0",
+            ),
+            ("[physics]\nsolver = 3\n", "unknown field `solver`"),
+        ] {
+            let text = format!("[terrain]\nspec = \"rigid\"\n{text}");
+            let err = format!("{:#}", Experiment::from_toml(&text, "p.toml").unwrap_err());
+            assert!(
+                err.contains(expected) && err.contains("p.toml [physics]"),
+                "{text:?} gave {err:?}"
+            );
+        }
     }
 
     #[test]

@@ -117,6 +117,8 @@ enum Policy {
         /// the task settings the policy was trained with (its observation
         /// layout and action prior)
         task: robot::task::TaskConfig,
+        /// the physics it was trained in
+        physics: robot::WorldConfig,
         /// set: sample actions with this generator; unset: the mean action
         sampler: Option<Box<rand_chacha::ChaCha8Rng>>,
     },
@@ -145,7 +147,7 @@ impl Policy {
         let trainer = learn::Trainer::load(&dir).with_context(|| format!("policy {arg}"))?;
         let config = crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE))
             .with_context(|| format!("policy {arg}"))?;
-        let task = config.task;
+        let (task, physics) = (config.task, config.physics);
         if trainer.policy.obs_size() != task.observation_size()
             || trainer.policy.action_size() != robot::action::ACTION_SIZE
         {
@@ -160,6 +162,7 @@ impl Policy {
         Ok(Self::Trained {
             trainer: Box::new(trainer),
             task,
+            physics,
             sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),
         })
     }
@@ -189,16 +192,23 @@ fn stats(values: &[f64]) -> serde_json::Value {
 
 fn run(args: &Run) -> Result<()> {
     let experiment = args.scene.experiment()?;
-    let (spec, mut task_config) = (experiment.terrain, experiment.task);
+    let (spec, mut task_config, mut physics) =
+        (experiment.terrain, experiment.task, experiment.physics);
     let mut policy = Policy::from_arg(
         args.policy,
         args.flags.stochastic.then_some(args.flags.seed),
     )?;
     match &policy {
-        Policy::Trained { task, .. } => {
-            // the observation layout and action prior the policy was trained with
+        Policy::Trained {
+            task,
+            physics: trained_in,
+            ..
+        } => {
+            // the observation layout, action prior and physics the policy
+            // was trained with
             task_config.observation = task.observation;
             task_config.action_prior = task.action_prior;
+            physics = trained_in.clone();
         }
         Policy::Scripted(_) if task_config.action_prior != ActionPrior::None => bail!(
             "--policy scripted runs the crawl itself; its config sets action_prior = {:?}, which adds the crawl to a trained policy's actions (use action_prior = \"none\")",
@@ -208,7 +218,7 @@ fn run(args: &Run) -> Result<()> {
     }
     task_config.max_phases = args.phases as usize;
     let model = args.scene.robot()?;
-    let world = make_world(&spec, model, args.flags.seed, [0.0, 0.0])?;
+    let world = make_world(&spec, model, args.flags.seed, [0.0, 0.0], &physics)?;
     let mut task = Task::new(world, task_config, args.flags.seed);
     let mut logger = args.rerun.open(
         args.default_sink.clone(),

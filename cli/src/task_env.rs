@@ -10,14 +10,15 @@ use anyhow::{Context, Result};
 use learn::trainer::derive_seed;
 use learn::{StepResult, VecEnv};
 use rayon::prelude::*;
-use robot::RobotModel;
 use robot::action::ACTION_SIZE;
 use robot::snapshot::{NoObserver, PhaseObserver, PhaseStart};
 use robot::task::{PhaseOutcome, RewardTerms, Task, TaskConfig};
+use robot::{RobotModel, WorldConfig};
 use terrain_plugins::TerrainSpec;
 use viz::RolloutLogger;
 
 use crate::commands::make_world;
+use crate::config::Experiment;
 
 /// Per-episode metrics, in the order of `episode_metrics`.
 pub const EPISODE_METRICS: [&str; 2] = ["distance_m", "goals_reached"];
@@ -76,6 +77,7 @@ pub struct TaskEnv {
     terrain: TerrainSpec,
     model: Arc<RobotModel>,
     task_config: TaskConfig,
+    physics: WorldConfig,
     terrain_seed: u64,
     /// one slot per task: its logger, if streamed
     loggers: Vec<Option<EnvLogger>>,
@@ -88,17 +90,21 @@ pub struct TaskEnv {
 }
 
 impl TaskEnv {
-    /// `envs` worlds on `terrain`; world `i`'s terrain draw is seeded by
-    /// `(seed, i)`. Stepped on `threads` threads.
+    /// `experiment.train.envs` worlds on `terrain` with the experiment's
+    /// task and physics; world `i`'s terrain draw is seeded by
+    /// `(experiment.train.seed, i)`. Stepped on `threads` threads.
     pub fn new(
         terrain: &TerrainSpec,
         model: &Arc<RobotModel>,
-        task: &TaskConfig,
-        envs: usize,
-        seed: u64,
+        experiment: &Experiment,
         threads: usize,
         interrupted: Arc<AtomicBool>,
     ) -> Result<Self> {
+        let (task, envs, seed) = (
+            &experiment.task,
+            experiment.train.envs,
+            experiment.train.seed,
+        );
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
@@ -110,6 +116,7 @@ impl TaskEnv {
             terrain: terrain.clone(),
             model: model.clone(),
             task_config: task.clone(),
+            physics: experiment.physics.clone(),
             terrain_seed: seed,
             pool,
             interrupted,
@@ -121,10 +128,11 @@ impl TaskEnv {
 
     /// Fresh tasks for environments `0..envs`, built in parallel.
     fn build_tasks(&self, envs: usize) -> Result<Vec<Task>> {
-        let (terrain, model, config, seed) = (
+        let (terrain, model, config, physics, seed) = (
             &self.terrain,
             &self.model,
             &self.task_config,
+            &self.physics,
             self.terrain_seed,
         );
         self.pool.install(|| {
@@ -136,6 +144,7 @@ impl TaskEnv {
                         model.clone(),
                         derive_seed(seed, i as u64),
                         [0.0, 0.0],
+                        physics,
                     )?;
                     Ok(Task::new(world, config.clone(), 0))
                 })

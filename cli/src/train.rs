@@ -288,17 +288,8 @@ pub fn train(args: &TrainArgs) -> Result<()> {
     }
 
     let model = args.scene.robot()?;
-    let build_env = |terrain| {
-        TaskEnv::new(
-            terrain,
-            &model,
-            &experiment.task,
-            experiment.train.envs,
-            experiment.train.seed,
-            threads,
-            interrupted.clone(),
-        )
-    };
+    let build_env =
+        |terrain| TaskEnv::new(terrain, &model, &experiment, threads, interrupted.clone());
     let mut stage = experiment.terrain_at(start_iteration).0;
     let mut env = build_env(experiment.terrain_at(start_iteration).1)?;
     let sink = args.rerun.sink(RerunSink::Spawn);

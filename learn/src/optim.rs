@@ -6,11 +6,19 @@ use candle_core::{Tensor, Var};
 
 use crate::LearnError;
 
-/// The gradient of each var (zeros where the loss does not depend on it).
+/// The gradient of each var (zeros where the loss does not depend on it),
+/// detached from candle's op graph.
+///
+/// candle builds the gradients out of tensor ops, so a gradient straight
+/// from `backward` still references the whole forward and backward graph
+/// of its step, activations included. Anything kept across steps (Adam's
+/// moments) must hold plain values: a moment computed from an undetached
+/// gradient keeps every earlier step's graph alive, and memory grows by
+/// megabytes per update.
 pub fn gradients(grads: &GradStore, vars: &[(String, Var)]) -> Result<Vec<Tensor>, LearnError> {
     vars.iter()
         .map(|(_, var)| match grads.get(var.as_tensor()) {
-            Some(g) => Ok(g.clone()),
+            Some(g) => Ok(g.detach()),
             None => Ok(var.as_tensor().zeros_like()?),
         })
         .collect()
@@ -85,6 +93,10 @@ impl Adam {
     /// m <- b1 m + (1 - b1) g;   v <- b2 v + (1 - b2) g^2
     /// theta <- theta - lr * (m / (1 - b1^t)) / (sqrt(v / (1 - b2^t)) + eps)
     /// ```
+    ///
+    /// The gradients are detached first and the moments stay detached, so
+    /// the optimiser's state never holds an op graph whatever the caller
+    /// passes (see [`gradients`]).
     pub fn apply(&mut self, grads: &[Tensor]) -> Result<(), LearnError> {
         assert_eq!(grads.len(), self.vars.len(), "adam: one gradient per var");
         self.step += 1;
@@ -93,6 +105,7 @@ impl Adam {
         let correction1 = 1.0 - b1.powi(t);
         let correction2 = 1.0 - b2.powi(t);
         for (k, g) in grads.iter().enumerate() {
+            let g = g.detach();
             self.m[k] = (self.m[k].affine(b1, 0.0)? + g.affine(1.0 - b1, 0.0)?)?;
             self.v[k] = (self.v[k].affine(b2, 0.0)? + g.sqr()?.affine(1.0 - b2, 0.0)?)?;
             let m_hat = self.m[k].affine(1.0 / correction1, 0.0)?;
@@ -102,7 +115,9 @@ impl Adam {
                 .affine(1.0, self.eps)?;
             let update = m_hat.div(&denom)?.affine(self.learning_rate, 0.0)?;
             let var = &self.vars[k].1;
-            var.set(&var.as_tensor().sub(&update)?)?;
+            // `set` copies the values into the var's storage; the var keeps
+            // no reference to `update`.
+            var.set(&var.as_tensor().detach().sub(&update)?)?;
         }
         Ok(())
     }

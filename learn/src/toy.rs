@@ -116,7 +116,9 @@ impl VecEnv for PointMass {
 mod tests {
     use super::*;
     use crate::config::PpoConfig;
+    use crate::optim::gradients;
     use crate::trainer::Trainer;
+    use candle_core::Tensor;
 
     fn toy_config() -> PpoConfig {
         PpoConfig {
@@ -168,6 +170,49 @@ mod tests {
             a[0] > 0.3 && a[1] < -0.3,
             "action {a:?} does not point at (0.5, -0.5)"
         );
+    }
+
+    #[test]
+    fn after_many_updates_no_state_holds_an_op_graph() {
+        // 8 envs x 16 steps = 128 samples, minibatch 32, 5 epochs: 20 Adam
+        // steps per iteration, 200 in all.
+        let mut env = PointMass::new(8, 16);
+        let mut t = Trainer::new(
+            PpoConfig {
+                hidden_sizes: vec![32, 16],
+                steps_per_env: 16,
+                minibatch_size: 32,
+                epochs: 5,
+                ..PpoConfig::default()
+            },
+            4,
+            2,
+            5,
+        )
+        .unwrap();
+        for _ in 0..10 {
+            t.iterate(&mut env).unwrap();
+        }
+        assert_eq!(t.adam.step, 200);
+        // Adam's moments are plain values: no op, not a variable. (A moment
+        // that tracked its op would keep every earlier step's graph alive.)
+        for (k, (m, v)) in t.adam.m.iter().zip(&t.adam.v).enumerate() {
+            assert!(!m.track_op(), "first moment {k} holds an op graph");
+            assert!(!v.track_op(), "second moment {k} holds an op graph");
+        }
+        // The parameters are still the trainer's own vars (updated in
+        // place, never replaced by a tensor derived from them).
+        for ((name, a), (_, b)) in t.policy.named_vars().iter().zip(t.adam.vars()) {
+            assert!(a.as_tensor().is_variable(), "{name} is no longer a var");
+            assert_eq!(a.as_tensor().id(), b.as_tensor().id(), "{name}");
+        }
+        // The gradients handed to Adam are detached.
+        let obs = Tensor::zeros((3, 4), candle_core::DType::F32, t.policy.device()).unwrap();
+        let loss = t.policy.critic.forward(&obs).unwrap().sum_all().unwrap();
+        let grads = loss.backward().unwrap();
+        for g in gradients(&grads, &t.policy.critic_vars()).unwrap() {
+            assert!(!g.track_op());
+        }
     }
 
     #[test]

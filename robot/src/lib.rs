@@ -15,4 +15,4 @@ pub mod world;
 pub use kinematics::{IkSolution, KinematicsError, LegKinematics};
 pub use model::{LAIKAGO_URDF, LegName, ModelError, RobotModel};
 pub use stand::{StandReport, stand};
-pub use world::{DT_SECS, GroundContacts, World, WorldConfig, WorldError};
+pub use world::{DT_SECS, GroundContacts, PdModel, World, WorldConfig, WorldError};

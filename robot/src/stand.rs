@@ -98,15 +98,76 @@ mod tests {
     use super::*;
     use crate::{RobotModel, WorldConfig};
 
-    fn stand_on(spec: &str, xy: [f64; 2], seconds: f64) -> StandReport {
+    fn world_on(spec: &str, xy: [f64; 2], config: WorldConfig) -> World {
         let model = Arc::new(RobotModel::laikago());
         let ctx = BuildContext {
             supported_mass_kg: model.total_mass_kg(),
             ..BuildContext::default()
         };
         let terrain = Registry::builtin().create(spec, &ctx).unwrap();
-        let mut world = World::new(model, terrain, WorldConfig::default(), xy).unwrap();
-        stand(&mut world, seconds)
+        World::new(model, terrain, config, xy).unwrap()
+    }
+
+    fn stand_on(spec: &str, xy: [f64; 2], seconds: f64) -> StandReport {
+        stand(&mut world_on(spec, xy, WorldConfig::default()), seconds)
+    }
+
+    #[test]
+    fn standing_on_rigid_ground_does_not_creep() {
+        // With converged contacts the squat holds its place: 4.9 mm in 10 s
+        // (the motor model at rapier's default passes crept 92 mm).
+        let mut world = world_on("rigid", [0.0, 0.0], WorldConfig::default());
+        let start = world.base_pose().translation.vector;
+        let r = stand(&mut world, 10.0);
+        let end = world.base_pose().translation.vector;
+        let drift_m = (end.xy() - start.xy()).norm();
+        assert!(drift_m < 0.015, "crept {drift_m} m: {r:?}");
+        assert!(r.max_tilt_deg < 1.0, "{r:?}");
+    }
+
+    #[test]
+    fn both_pd_models_hold_the_squat_alike() {
+        // The implicit spring (default) and the motor solved to convergence
+        // (4 substeps x 4 PGS passes) are the same PD: after 3 s standing
+        // on 5 cm tiles the joints agree within 0.01 rad, the base height
+        // within 5 mm, and both track the squat within 0.05 rad.
+        let motor = WorldConfig {
+            pd: crate::PdModel::Motor,
+            solver_iterations: 4,
+            pgs_iterations: 4,
+            ..WorldConfig::default()
+        };
+        let mut a = world_on("elastic:5cm", [0.0, 0.0], WorldConfig::default());
+        let mut b = world_on("elastic:5cm", [0.0, 0.0], motor);
+        let (ra, rb) = (stand(&mut a, 3.0), stand(&mut b, 3.0));
+        let (qa, qb) = (a.joint_positions_rad(), b.joint_positions_rad());
+        for j in 0..qa.len() {
+            assert!((qa[j] - qb[j]).abs() < 0.01, "joint {j}: {qa:?} vs {qb:?}");
+            for (w, q) in [(&a, &qa), (&b, &qb)] {
+                let error = (w.joint_targets_rad()[j] - q[j]).abs();
+                assert!(error < 0.05, "joint {j} off its target by {error} rad");
+            }
+        }
+        assert!(
+            (ra.base_height_m - rb.base_height_m).abs() < 0.005,
+            "{ra:?} vs {rb:?}"
+        );
+    }
+
+    #[test]
+    fn the_implicit_spring_pd_is_capped_at_the_effort() {
+        // A knee target 1 rad away (clamped to the joint's limit) asks far
+        // more than the URDF's 100 N m; the joint gets, and reports, 100.
+        let mut world = world_on("rigid", [0.0, 0.0], WorldConfig::default());
+        stand(&mut world, 0.5);
+        let knee = 2;
+        let mut targets = world.joint_targets_rad().to_vec();
+        targets[knee] += 1.0;
+        world.set_joint_targets_rad(&targets);
+        world.step();
+        let effort = world.model().joints[knee].effort_n_m;
+        let tau = world.applied_torques_n_m()[knee];
+        assert!((tau.abs() - effort).abs() < 1e-9, "{tau} vs {effort}");
     }
 
     #[test]

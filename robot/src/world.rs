@@ -1,12 +1,18 @@
 //! The physics world: rapier sets, a terrain and the robot as a multibody
-//! with force-based PD joint motors, stepped at 240 Hz.
+//! with PD-controlled joints, stepped at 240 Hz.
 //!
-//! Robot: a rapier multibody (reduced coordinates; stable at 4 solver
-//! iterations on rigid and elastic ground). Each actuated joint has a
-//! `MotorModel::ForceBased` position motor, so the gains are in N m/rad and
-//! N m s/rad, with the URDF's effort as the torque limit. Rapier cannot
-//! report a multibody motor's torque, so the world computes the PD torque
-//! itself after each step: tau = clamp(kp (q* - q) - kd q', +-effort).
+//! Robot: a rapier multibody (reduced coordinates). The PD controller is,
+//! by default, the multibody's own implicit joint spring and damping
+//! ([`PdModel::ImplicitSpring`]: no solver rows, stable at one substep per
+//! step), or a `MotorModel::ForceBased` position motor per joint
+//! ([`PdModel::Motor`]); either way the gains are in N m/rad and N m s/rad,
+//! with the URDF's effort as the torque limit. Rapier cannot report the
+//! joint torque, so the world computes the PD torque itself after each
+//! step: tau = clamp(kp (q* - q) - kd q', +-effort).
+//!
+//! Cost: rapier rebuilds the multibody's mass matrix and two LU
+//! factorisations in every substep, so one substep instead of rapier's
+//! default four makes a step about three times cheaper (BENCHMARKS.md).
 //!
 //! Collision groups: robot colliders meet terrain colliders only.
 
@@ -29,9 +35,56 @@ pub const SQUAT_FOOT_DEPTH_M: f64 = 0.35;
 /// (a narrow stance tips over on 5 cm springs).
 pub const SQUAT_FOOT_WIDTH_M: f64 = 0.2;
 
+/// The index of a revolute joint's free axis (`AngX`) in rapier's 6-DoF
+/// spatial layout (three linear, then three angular).
+const ANG_X: usize = 3;
+
 /// Two shapes closer than this touch, m (rapier also pairs shapes up to
 /// 2 cm apart, for speculative contacts; those do not count).
 pub const TOUCH_DISTANCE_M: f64 = 0.001;
+
+/// How the joints' PD controllers are simulated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PdModel {
+    /// A `MotorModel::ForceBased` position motor per joint: a velocity
+    /// constraint row in rapier's solver, solved with the contacts in every
+    /// substep, its force capped at the joint's effort. With rapier's
+    /// default solver passes (4 substeps, 1 PGS iteration each) the motor
+    /// rows and the foot friction do not converge: stance feet slip ~1 cm
+    /// per phase and the standing robot creeps 9 cm in 10 s on rigid ground
+    /// (BENCHMARKS.md, "What the physics does").
+    Motor,
+    /// The PD as the multibody's own implicit joint spring and damping
+    /// (rapier's `MultibodyJoint::set_spring` and `Multibody::damping_mut`):
+    /// `tau = kp (q* - q) - kd q'`, integrated backward-Euler inside the
+    /// articulated dynamics, so no solver rows. The effort cap is applied
+    /// before each step: where the PD torque at the current state would
+    /// exceed the effort, the spring's rest angle is moved so that it equals
+    /// the cap, `rest = q + (clamp(tau) + kd q') / kp`. The default: stable
+    /// at one substep, and what the robot does then matches the motor model
+    /// solved to convergence (4 substeps x 4 PGS iterations).
+    #[default]
+    ImplicitSpring,
+}
+
+impl PdModel {
+    /// The name used in configs.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Motor => "motor",
+            Self::ImplicitSpring => "implicit_spring",
+        }
+    }
+
+    /// The model of a config name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "motor" => Some(Self::Motor),
+            "implicit_spring" => Some(Self::ImplicitSpring),
+            _ => None,
+        }
+    }
+}
 
 /// Settings of the world.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,8 +93,18 @@ pub struct WorldConfig {
     pub kp_n_m_per_rad: f64,
     /// PD velocity gain, N m s/rad
     pub kd_n_m_s_per_rad: f64,
-    /// rapier solver iterations per step
+    /// how the PD is simulated
+    pub pd: PdModel,
+    /// rapier substeps per step (`num_solver_iterations`); the multibody's
+    /// mass matrix and its LU are rebuilt in each, so a step costs about
+    /// this many times the articulated dynamics
     pub solver_iterations: usize,
+    /// rapier constraint-solver passes inside each substep
+    /// (`num_internal_pgs_iterations`)
+    pub pgs_iterations: usize,
+    /// continuous collision detection against fixed colliders (rapier's
+    /// `max_ccd_substeps` 1, or 0 when off)
+    pub ccd: bool,
     /// friction coefficient of the robot's colliders
     pub friction: f64,
 }
@@ -51,7 +114,10 @@ impl Default for WorldConfig {
         Self {
             kp_n_m_per_rad: 600.0,
             kd_n_m_s_per_rad: 8.0,
-            solver_iterations: 4,
+            pd: PdModel::ImplicitSpring,
+            solver_iterations: 1,
+            pgs_iterations: 4,
+            ccd: true,
             friction: 1.0,
         }
     }
@@ -123,6 +189,8 @@ impl World {
         physics.gravity = Vector::new(0.0, 0.0, -terrain_plugins::STANDARD_GRAVITY_M_PER_S2 as f32);
         physics.integration_parameters.dt = DT_SECS as f32;
         physics.integration_parameters.num_solver_iterations = config.solver_iterations;
+        physics.integration_parameters.num_internal_pgs_iterations = config.pgs_iterations;
+        physics.integration_parameters.max_ccd_substeps = usize::from(config.ccd);
         terrain.build(&mut physics);
 
         let robot = insert_robot(&mut physics, &model, &config)?;
@@ -200,7 +268,7 @@ impl World {
         let mut displacement = vec![0.0f32; multibody.ndofs()];
         for (j, &link_id) in self.robot.joint_links.iter().enumerate() {
             let link = multibody.link(link_id).expect("joint link exists");
-            let current = link.joint.coords()[3];
+            let current = link.joint.coords()[ANG_X];
             displacement[link.assembly_id()] = q_rad[j] as f32 - current;
         }
         multibody.apply_displacements(&displacement);
@@ -221,43 +289,77 @@ impl World {
         self.terrain.reset(&mut self.physics);
     }
 
-    /// Sets the PD position targets (joint order), clamped to the limits.
+    /// Sets the PD position targets (joint order), clamped to the limits; a
+    /// target that is not finite keeps the joint's previous one.
     pub fn set_joint_targets_rad(&mut self, targets_rad: &[f64]) {
         assert_eq!(
             targets_rad.len(),
             self.targets_rad.len(),
             "one target per actuated joint"
         );
-        let multibody = self
-            .physics
-            .multibody_joints
-            .get_multibody_mut(self.robot.multibody)
-            .expect("the robot's multibody exists");
+        for (j, &target) in targets_rad.iter().enumerate() {
+            if target.is_finite() {
+                let (lo, hi) = self.limits_rad[j];
+                self.targets_rad[j] = target.clamp(lo, hi);
+            }
+        }
+        if self.config.pd == PdModel::Motor {
+            let (kp, kd) = (self.config.kp_n_m_per_rad, self.config.kd_n_m_s_per_rad);
+            let multibody = self
+                .physics
+                .multibody_joints
+                .get_multibody_mut(self.robot.multibody)
+                .expect("the robot's multibody exists");
+            for (j, &link_id) in self.robot.joint_links.iter().enumerate() {
+                let link = multibody.link_mut(link_id).expect("joint link exists");
+                link.joint.data.set_motor_position(
+                    JointAxis::AngX,
+                    self.targets_rad[j] as f32,
+                    kp as f32,
+                    kd as f32,
+                );
+            }
+        }
+    }
+
+    /// Sets each joint's implicit spring for the coming step: rest at the
+    /// target, or, where the PD torque at the current state would exceed
+    /// the effort, at the angle that makes it equal the cap (see
+    /// [`PdModel::ImplicitSpring`]).
+    fn set_implicit_springs(&mut self) {
+        let (kp, kd) = (self.config.kp_n_m_per_rad, self.config.kd_n_m_s_per_rad);
+        let multibody = multibody_mut(&mut self.physics, self.robot.multibody);
         for (j, &link_id) in self.robot.joint_links.iter().enumerate() {
-            let (lo, hi) = self.limits_rad[j];
-            let target = if targets_rad[j].is_finite() {
-                targets_rad[j].clamp(lo, hi)
+            let dof = multibody
+                .link(link_id)
+                .expect("joint link exists")
+                .assembly_id();
+            let qd = f64::from(multibody.generalized_velocity()[dof]);
+            let link = multibody.link_mut(link_id).expect("joint link exists");
+            let q = f64::from(link.joint.coords()[ANG_X]);
+            // tau = kp (q* - q) - kd q', capped at the effort
+            let tau = kp * (self.targets_rad[j] - q) - kd * qd;
+            let effort = self.efforts_n_m[j];
+            let rest = if tau.abs() > effort {
+                q + (tau.clamp(-effort, effort) + kd * qd) / kp
             } else {
                 self.targets_rad[j]
             };
-            self.targets_rad[j] = target;
-            let link = multibody.link_mut(link_id).expect("joint link exists");
-            link.joint.data.set_motor_position(
-                JointAxis::AngX,
-                target as f32,
-                self.config.kp_n_m_per_rad as f32,
-                self.config.kd_n_m_s_per_rad as f32,
-            );
+            link.joint.set_spring(ANG_X, kp as f32, rest as f32);
         }
     }
 
     /// One physics step of [`DT_SECS`].
     pub fn step(&mut self) {
+        if self.config.pd == PdModel::ImplicitSpring {
+            self.set_implicit_springs();
+        }
         self.terrain.before_step(&mut self.physics, DT_SECS);
         self.physics.step();
+        self.terrain.after_step(&mut self.physics, DT_SECS);
         self.time_secs += DT_SECS;
         self.steps += 1;
-        // The torque the PD motors apply (rapier does not report it).
+        // The torque the PD applies (rapier does not report it).
         let q = self.joint_positions_rad();
         let qd = self.joint_velocities_rad_per_s();
         for j in 0..q.len() {
@@ -278,7 +380,7 @@ impl World {
                     .link(id)
                     .expect("joint link exists")
                     .joint
-                    .coords()[3] as f64
+                    .coords()[ANG_X] as f64
             })
             .collect()
     }
@@ -530,6 +632,14 @@ impl World {
     }
 }
 
+/// The robot's multibody in `physics`.
+fn multibody_mut(physics: &mut PhysicsWorld, index: MultibodyIndex) -> &mut Multibody {
+    physics
+        .multibody_joints
+        .get_multibody_mut(index)
+        .expect("the robot's multibody exists")
+}
+
 fn insert_robot(
     physics: &mut PhysicsWorld,
     model: &RobotModel,
@@ -603,16 +713,19 @@ fn insert_robot(
         let frame1 = joint.child_in_parent * frame2;
         let mut builder = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
             .local_frame1(to_pose(&frame1))
-            .local_frame2(to_pose(&frame2))
-            .motor_model(JointAxis::AngX, MotorModel::ForceBased)
-            .motor_position(
-                JointAxis::AngX,
-                0.0,
-                config.kp_n_m_per_rad as f32,
-                config.kd_n_m_s_per_rad as f32,
-            );
-        if joint.effort_n_m.is_finite() {
-            builder = builder.motor_max_force(JointAxis::AngX, joint.effort_n_m as f32);
+            .local_frame2(to_pose(&frame2));
+        if config.pd == PdModel::Motor {
+            builder = builder
+                .motor_model(JointAxis::AngX, MotorModel::ForceBased)
+                .motor_position(
+                    JointAxis::AngX,
+                    0.0,
+                    config.kp_n_m_per_rad as f32,
+                    config.kd_n_m_s_per_rad as f32,
+                );
+            if joint.effort_n_m.is_finite() {
+                builder = builder.motor_max_force(JointAxis::AngX, joint.effort_n_m as f32);
+            }
         }
         if let Some((lo, hi)) = joint.limits_rad {
             builder = builder.limits(JointAxis::AngX, [lo as f32, hi as f32]);
@@ -632,7 +745,7 @@ fn insert_robot(
         .rigid_body_link(bodies[0])
         .expect("the root is in the multibody");
     let multibody = root_link.multibody;
-    let joint_links = model
+    let joint_links: Vec<usize> = model
         .joints
         .iter()
         .map(|j| {
@@ -643,6 +756,18 @@ fn insert_robot(
                 .id
         })
         .collect();
+    if config.pd == PdModel::ImplicitSpring {
+        // kd as the joints' implicit damping; the springs are set before
+        // every step (World::set_implicit_springs).
+        let multibody = multibody_mut(physics, multibody);
+        for &link_id in &joint_links {
+            let dof = multibody
+                .link(link_id)
+                .expect("joint link exists")
+                .assembly_id();
+            multibody.damping_mut()[dof] = config.kd_n_m_s_per_rad as f32;
+        }
+    }
     Ok(RobotHandles {
         bodies,
         multibody,

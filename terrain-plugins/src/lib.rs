@@ -131,8 +131,9 @@ impl Rect {
 ///
 /// Life cycle: a plugin creates it from a spec, [`Terrain::build`] inserts its
 /// bodies, colliders and joints into a world (once), then the world calls
-/// [`Terrain::before_step`] before every physics step. Queries take the world
-/// the terrain was built into.
+/// [`Terrain::before_step`] before every physics step and
+/// [`Terrain::after_step`] after it. Queries take the world the terrain was
+/// built into.
 pub trait Terrain: Send {
     /// The spec this terrain was made from, in canonical form.
     fn spec(&self) -> &TerrainSpec;
@@ -142,6 +143,9 @@ pub trait Terrain: Send {
     /// Called before every physics step (e.g. to apply custom forces or
     /// recycle tiles). Default: nothing.
     fn before_step(&mut self, _world: &mut PhysicsWorld, _dt_secs: f64) {}
+    /// Called after every physics step (e.g. to put idle parts to sleep).
+    /// Default: nothing.
+    fn after_step(&mut self, _world: &mut PhysicsWorld, _dt_secs: f64) {}
     /// Puts every moving part back at rest (between episodes). Default:
     /// nothing (a terrain without moving parts).
     fn reset(&mut self, _world: &mut PhysicsWorld) {}

@@ -179,6 +179,18 @@ proptest! {
     }
 }
 
+/// The tile whose centre is at the origin.
+fn centre_tile(world: &PhysicsWorld) -> RigidBodyHandle {
+    world
+        .bodies
+        .iter()
+        .find(|(_, b)| {
+            b.is_dynamic() && b.translation().x.abs() < 0.01 && b.translation().y.abs() < 0.01
+        })
+        .expect("a tile is centred on the origin")
+        .0
+}
+
 fn world_with(spec: &str, seed: u64) -> (PhysicsWorld, Box<dyn Terrain>) {
     let ctx = BuildContext {
         seed,
@@ -208,14 +220,7 @@ fn a_tile_pressed_and_released_returns_to_rest_within_a_second() {
     let mut tiles = Vec::new();
     terrain.tiles_in(&world, Rect::around([0.0, 0.0], 0.05), &mut tiles);
     assert_eq!(tiles.len(), 1);
-    let handle = world
-        .bodies
-        .iter()
-        .find(|(_, b)| {
-            b.is_dynamic() && b.translation().x.abs() < 0.01 && b.translation().y.abs() < 0.01
-        })
-        .unwrap()
-        .0;
+    let handle = centre_tile(&world);
 
     // Press with a quarter of the robot's weight: it sinks the nominal depth.
     let press_n = 25.567 * 9.81 / 4.0;
@@ -240,6 +245,51 @@ fn a_tile_pressed_and_released_returns_to_rest_within_a_second() {
     }
     let secs = back_after_secs.expect("the tile never settled within 1 mm of rest");
     assert!(secs < 1.0, "tile took {secs} s to return");
+}
+
+/// One step as the robot's world takes it: the terrain's hooks around
+/// rapier's step.
+fn step(world: &mut PhysicsWorld, terrain: &mut Box<dyn Terrain>) {
+    terrain.before_step(world, 1.0 / 240.0);
+    world.step();
+    terrain.after_step(world, 1.0 / 240.0);
+}
+
+#[test]
+fn a_new_fields_tiles_sleep_from_its_second_step_and_still_carry_load() {
+    let awake = |world: &PhysicsWorld| {
+        world
+            .bodies
+            .iter()
+            .filter(|(_, b)| b.is_dynamic() && !b.is_sleeping())
+            .count()
+    };
+    // rapier's first step wakes every body (its islands are built then)
+    let (mut bare, _) = world_with("elastic:5cm", 0);
+    bare.step();
+    assert_eq!(
+        awake(&bare),
+        1500,
+        "rapier woke the tiles: the hook has work"
+    );
+    let (mut world, mut terrain) = world_with("elastic:5cm", 0);
+    step(&mut world, &mut terrain);
+    step(&mut world, &mut terrain);
+    assert_eq!(
+        awake(&world),
+        0,
+        "untouched tiles are asleep after two steps"
+    );
+    // A tile put to sleep this way still hangs on its spring: pressed with
+    // a quarter of the robot's weight it sinks the nominal depth.
+    let handle = centre_tile(&world);
+    let press_n = 25.567 * 9.81 / 4.0;
+    world.bodies[handle].add_force(Vector::new(0.0, 0.0, -press_n as f32), true);
+    for _ in 0..480 {
+        step(&mut world, &mut terrain);
+    }
+    let pressed = -terrain.surface_height_m(&world, 0.0, 0.0);
+    assert!((pressed - 0.05).abs() < 0.002, "pressed sink {pressed}");
 }
 
 #[test]

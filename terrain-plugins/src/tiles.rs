@@ -221,6 +221,8 @@ pub struct TiledTerrain {
     /// one entry per cell, row-major by column: `None` for rigid cells
     tiles: Vec<Option<RigidBodyHandle>>,
     built: bool,
+    /// the world has taken its first step (see [`Terrain::after_step`])
+    stepped: bool,
 }
 
 impl TiledTerrain {
@@ -310,6 +312,7 @@ impl TiledTerrain {
             first_center_m: [first_x, first_y],
             tiles: Vec::new(),
             built: false,
+            stepped: false,
         }
     }
 
@@ -340,6 +343,25 @@ impl TiledTerrain {
             .bodies
             .get(handle)
             .map_or(0.0, |body| rest_center_z - body.translation().z as f64)
+    }
+
+    /// Puts tile `index` back at rest (top face at z = 0, no velocity) and
+    /// to sleep. (Setting the pose and velocities through rapier's setters,
+    /// not only the sleep flag, is what lets rapier take the body out of
+    /// its active set properly: a tile only flagged asleep right after the
+    /// first step kept being integrated without its joint and fell away.)
+    fn put_to_rest(&self, world: &mut PhysicsWorld, index: usize, handle: RigidBodyHandle) {
+        let Some(body) = world.bodies.get_mut(handle) else {
+            return;
+        };
+        let [cx, cy] = self.center_m(index / self.rows, index % self.rows);
+        body.set_translation(
+            Vector::new(cx as f32, cy as f32, (-TILE_THICKNESS_M / 2.0) as f32),
+            false,
+        );
+        body.set_linvel(Vector::ZERO, false);
+        body.set_angvel(Vector::ZERO, false);
+        body.sleep();
     }
 
     /// The tile parameters.
@@ -438,6 +460,38 @@ impl Terrain for TiledTerrain {
         }
     }
 
+    /// After a fresh world's first step, puts back to sleep every tile that
+    /// is still at rest. The tiles are inserted asleep, but rapier's first
+    /// step (which builds its islands) wakes every body, and an awake body
+    /// sleeps only after 0.5 s of rest: without this, each new world solved
+    /// all its tile joints (1,500 on the default 20 m field) for its first
+    /// 120 steps, the whole settle of an episode. A tile the robot already
+    /// touches is moving and stays awake; a sleeping tile wakes on contact,
+    /// as in every later step.
+    fn after_step(&mut self, world: &mut PhysicsWorld, _dt_secs: f64) {
+        if self.stepped {
+            return;
+        }
+        self.stepped = true;
+        for handle in self.tiles.iter().flatten() {
+            let sink_m = self.tile_sink_m(world, *handle);
+            let Some(body) = world.bodies.get_mut(*handle) else {
+                continue;
+            };
+            let at_rest = sink_m.abs() < 1e-5
+                && body.linvel().length() < 1e-4
+                && body.angvel().length() < 1e-4;
+            if at_rest && !body.is_sleeping() {
+                // Eligible now: rapier's own sleep pass takes it out of the
+                // active set at the next step (flagging it asleep by hand
+                // here, right after the first step, left it integrated
+                // without its joint: it fell away).
+                let activation = body.activation_mut();
+                activation.time_since_can_sleep = activation.time_until_sleep;
+            }
+        }
+    }
+
     fn reset(&mut self, world: &mut PhysicsWorld) {
         for (index, handle) in self.tiles.iter().enumerate() {
             let Some(handle) = *handle else { continue };
@@ -447,14 +501,7 @@ impl Terrain for TiledTerrain {
             if body.is_sleeping() {
                 continue; // asleep means at rest already
             }
-            let [cx, cy] = self.center_m(index / self.rows, index % self.rows);
-            body.set_translation(
-                Vector::new(cx as f32, cy as f32, (-TILE_THICKNESS_M / 2.0) as f32),
-                false,
-            );
-            body.set_linvel(Vector::ZERO, false);
-            body.set_angvel(Vector::ZERO, false);
-            body.sleep();
+            self.put_to_rest(world, index, handle);
         }
     }
 

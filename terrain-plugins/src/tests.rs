@@ -293,6 +293,30 @@ fn a_new_fields_tiles_sleep_from_its_second_step_and_still_carry_load() {
 }
 
 #[test]
+fn a_tile_reset_while_loaded_rests_and_still_carries_load() {
+    // `reset` puts a pressed (awake) tile back at rest and to sleep; pressed
+    // again, it must still hang on its spring.
+    let (mut world, mut terrain) = world_with("elastic:5cm", 0);
+    let handle = centre_tile(&world);
+    let press_n = 25.567 * 9.81 / 4.0;
+    for round in 0..2 {
+        world.bodies[handle].add_force(Vector::new(0.0, 0.0, -press_n as f32), true);
+        for _ in 0..480 {
+            step(&mut world, &mut terrain);
+        }
+        let pressed = -terrain.surface_height_m(&world, 0.0, 0.0);
+        assert!(
+            (pressed - 0.05).abs() < 0.002,
+            "round {round}: pressed sink {pressed}"
+        );
+        world.bodies[handle].reset_forces(true);
+        terrain.reset(&mut world);
+        assert!(terrain.surface_height_m(&world, 0.0, 0.0).abs() < 1e-6);
+        assert!(world.bodies[handle].is_sleeping());
+    }
+}
+
+#[test]
 fn idle_tiles_sleep_and_rest_at_the_surface() {
     let (mut world, terrain) = world_with("elastic:5cm", 0);
     for _ in 0..240 {

@@ -19,7 +19,8 @@
 //!
 //! Idle tiles cost no physics time: tiles are inserted asleep, each is its own
 //! island (the base is fixed), and rapier only wakes those the robot touches;
-//! they fall asleep again once still.
+//! they fall asleep again once still. (Rapier's first step of a new world
+//! wakes them all; `after_step` sends the untouched ones back to sleep.)
 //!
 //! Layout: tile centres lie on multiples of the tile pitch (so a robot placed
 //! at a whole number of pitches stands with its feet near tile centres);
@@ -346,10 +347,7 @@ impl TiledTerrain {
     }
 
     /// Puts tile `index` back at rest (top face at z = 0, no velocity) and
-    /// to sleep. (Setting the pose and velocities through rapier's setters,
-    /// not only the sleep flag, is what lets rapier take the body out of
-    /// its active set properly: a tile only flagged asleep right after the
-    /// first step kept being integrated without its joint and fell away.)
+    /// to sleep (between episodes; tested to carry load again after it).
     fn put_to_rest(&self, world: &mut PhysicsWorld, index: usize, handle: RigidBodyHandle) {
         let Some(body) = world.bodies.get_mut(handle) else {
             return;
@@ -460,8 +458,9 @@ impl Terrain for TiledTerrain {
         }
     }
 
-    /// After a fresh world's first step, puts back to sleep every tile that
-    /// is still at rest. The tiles are inserted asleep, but rapier's first
+    /// After a fresh world's first step, makes every tile that is still at
+    /// rest eligible for sleep, so that rapier's own sleep pass puts it to
+    /// sleep at the next step. The tiles are inserted asleep, but rapier's first
     /// step (which builds its islands) wakes every body, and an awake body
     /// sleeps only after 0.5 s of rest: without this, each new world solved
     /// all its tile joints (1,500 on the default 20 m field) for its first

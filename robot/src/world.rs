@@ -305,11 +305,7 @@ impl World {
         }
         if self.config.pd == PdModel::Motor {
             let (kp, kd) = (self.config.kp_n_m_per_rad, self.config.kd_n_m_s_per_rad);
-            let multibody = self
-                .physics
-                .multibody_joints
-                .get_multibody_mut(self.robot.multibody)
-                .expect("the robot's multibody exists");
+            let multibody = multibody_mut(&mut self.physics, self.robot.multibody);
             for (j, &link_id) in self.robot.joint_links.iter().enumerate() {
                 let link = multibody.link_mut(link_id).expect("joint link exists");
                 link.joint.data.set_motor_position(

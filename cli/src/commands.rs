@@ -202,6 +202,11 @@ impl SceneArgs {
         }
     }
 
+    /// The experiment file, when --config was given.
+    pub fn config_path(&self) -> Option<&Path> {
+        self.config.as_deref()
+    }
+
     /// Whether --terrain or --config was given.
     pub fn is_given(&self) -> bool {
         self.terrain.is_some() || self.config.is_some()

@@ -16,6 +16,8 @@ macro_rules! out {
 mod bench;
 mod commands;
 mod config;
+mod eval;
+mod policy;
 mod rollout;
 mod task_env;
 mod train;
@@ -45,6 +47,8 @@ enum Command {
     Rollout(rollout::RolloutArgs),
     /// Run a policy and watch it in the Rerun viewer (rollout with --rerun spawn by default).
     Play(rollout::PlayArgs),
+    /// Evaluate a policy on many episodes of unseen seeds: success, distance, falls, the paper's Table I and Fig. 4, PNG figures.
+    Eval(Box<eval::EvalArgs>),
     /// Train a policy with PPO on parallel worlds (checkpoints, --resume, Rerun)
     Train(train::TrainArgs),
     /// Measure physics steps per second of the robot standing, one world per thread.
@@ -84,6 +88,7 @@ fn main() -> ExitCode {
         Command::Stand(args) => commands::stand(&args),
         Command::Rollout(args) => rollout::rollout(&args),
         Command::Play(args) => rollout::play(&args),
+        Command::Eval(args) => eval::eval(&args),
         Command::Train(args) => train::train(&args),
         Command::Bench(args) => bench::run(&args),
     };

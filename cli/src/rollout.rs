@@ -5,14 +5,14 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use clap::Args;
-use robot::scripted::ScriptedCrawl;
-use robot::task::{ActionPrior, RewardTerms, Task};
+use robot::task::{RewardTerms, Task};
 use serde_json::json;
 use viz::RerunSink;
 
 use crate::commands::{SceneArgs, make_world};
+use crate::policy::Policy;
 use crate::viz_args::{RerunArgs, print_warnings};
 
 /// The flags `rollout` and `play` share with the same defaults.
@@ -107,79 +107,6 @@ pub fn play(args: &PlayArgs) -> Result<()> {
     })
 }
 
-/// What chooses the actions.
-enum Policy {
-    /// the scripted crawl
-    Scripted(ScriptedCrawl),
-    /// a trained checkpoint, mean action
-    Trained {
-        trainer: Box<learn::Trainer>,
-        /// the task settings the policy was trained with (its observation
-        /// layout and action prior)
-        task: robot::task::TaskConfig,
-        /// the physics it was trained in
-        physics: robot::WorldConfig,
-        /// set: sample actions with this generator; unset: the mean action
-        sampler: Option<Box<rand_chacha::ChaCha8Rng>>,
-    },
-}
-
-impl Policy {
-    /// `scripted`, or a checkpoint path; `sample_seed` makes a trained
-    /// policy sample its actions.
-    fn from_arg(arg: &str, sample_seed: Option<u64>) -> Result<Self> {
-        if arg == "scripted" {
-            if sample_seed.is_some() {
-                bail!(
-                    "--stochastic needs a trained policy; the scripted crawl has no distribution"
-                );
-            }
-            return Ok(Self::Scripted(ScriptedCrawl::default()));
-        }
-        let path = Path::new(arg);
-        if !path.exists() {
-            bail!(
-                "policy {arg:?} is neither `scripted` nor an existing checkpoint or run directory"
-            );
-        }
-        let dir =
-            learn::checkpoint::resolve_checkpoint(path).with_context(|| format!("policy {arg}"))?;
-        let trainer = learn::Trainer::load(&dir).with_context(|| format!("policy {arg}"))?;
-        let config = crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE))
-            .with_context(|| format!("policy {arg}"))?;
-        let (task, physics) = (config.task, config.physics);
-        if trainer.policy.obs_size() != task.observation_size()
-            || trainer.policy.action_size() != robot::action::ACTION_SIZE
-        {
-            bail!(
-                "policy {arg}: its networks take {} observations and give {} actions, but its config says {} and {}",
-                trainer.policy.obs_size(),
-                trainer.policy.action_size(),
-                task.observation_size(),
-                robot::action::ACTION_SIZE
-            );
-        }
-        Ok(Self::Trained {
-            trainer: Box::new(trainer),
-            task,
-            physics,
-            sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),
-        })
-    }
-
-    fn action(&mut self, task: &Task, obs: &[f32]) -> Result<Vec<f32>> {
-        Ok(match self {
-            Self::Scripted(crawl) => crawl.act(task).to_vec(),
-            Self::Trained {
-                trainer,
-                sampler: Some(rng),
-                ..
-            } => trainer.act_stochastic(obs, rng)?,
-            Self::Trained { trainer, .. } => trainer.act_deterministic(obs)?,
-        })
-    }
-}
-
 /// Summary statistics of a series.
 fn stats(values: &[f64]) -> serde_json::Value {
     let n = values.len().max(1) as f64;
@@ -198,24 +125,7 @@ fn run(args: &Run) -> Result<()> {
         args.policy,
         args.flags.stochastic.then_some(args.flags.seed),
     )?;
-    match &policy {
-        Policy::Trained {
-            task,
-            physics: trained_in,
-            ..
-        } => {
-            // the observation layout, action prior and physics the policy
-            // was trained with
-            task_config.observation = task.observation;
-            task_config.action_prior = task.action_prior;
-            physics = trained_in.clone();
-        }
-        Policy::Scripted(_) if task_config.action_prior != ActionPrior::None => bail!(
-            "--policy scripted runs the crawl itself; its config sets action_prior = {:?}, which adds the crawl to a trained policy's actions (use action_prior = \"none\")",
-            task_config.action_prior.name()
-        ),
-        Policy::Scripted(_) => {}
-    }
+    policy.fit_scene(&mut task_config, &mut physics, None)?;
     task_config.max_phases = args.phases as usize;
     let model = args.scene.robot()?;
     let world = make_world(&spec, model, args.flags.seed, [0.0, 0.0], &physics)?;

@@ -6,6 +6,7 @@ use std::process::{Command, Output};
 
 use serde_json::Value;
 
+mod eval;
 #[cfg(feature = "rerun")]
 mod rerun_stream;
 mod train;

@@ -10,10 +10,10 @@ use serde_json::Value;
 use super::{failure, json_of, quadwalk};
 
 /// A small, fast experiment: 2 worlds x 4 phases per iteration.
-const TINY: &str = "[terrain]\nspec = \"rigid\"\n\n[task]\nmax_phases = 4\n\n[ppo]\nhidden_sizes = [16]\nsteps_per_env = 4\nminibatch_size = 4\nepochs = 2\n\n[train]\nenvs = 2\niterations = 3\ncheckpoint_every = 1\n";
+pub(crate) const TINY: &str = "[terrain]\nspec = \"rigid\"\n\n[task]\nmax_phases = 4\n\n[ppo]\nhidden_sizes = [16]\nsteps_per_env = 4\nminibatch_size = 4\nepochs = 2\n\n[train]\nenvs = 2\niterations = 3\ncheckpoint_every = 1\n";
 
 /// A fresh directory under the test target's scratch space.
-fn scratch_dir(name: &str) -> PathBuf {
+pub(crate) fn scratch_dir(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join("train")
         .join(name);
@@ -22,7 +22,7 @@ fn scratch_dir(name: &str) -> PathBuf {
     dir
 }
 
-fn tiny_config(dir: &Path) -> PathBuf {
+pub(crate) fn tiny_config(dir: &Path) -> PathBuf {
     let path = dir.join("tiny.toml");
     std::fs::write(&path, TINY).unwrap();
     path
@@ -36,7 +36,7 @@ fn tiny_variant(dir: &Path, from: &str, to: &str) -> PathBuf {
     path
 }
 
-fn s(p: &Path) -> &str {
+pub(crate) fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
@@ -64,7 +64,7 @@ fn train_args<'a>(config: &'a Path, run: &'a Path, iterations: &'a str) -> [&'a 
 }
 
 /// [`train_args`], which must succeed.
-fn train_tiny(config: &Path, run: &Path, iterations: &str) {
+pub(crate) fn train_tiny(config: &Path, run: &Path, iterations: &str) {
     ok(&train_args(config, run, iterations));
 }
 

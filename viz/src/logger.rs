@@ -227,6 +227,24 @@ impl RolloutLogger {
         self.check_connection();
     }
 
+    /// Logs a curve as scalars at `entity`, one per point (x, y), with x on
+    /// the sequence timeline `timeline` only (`eval`'s figures).
+    pub fn log_curve(&mut self, entity: &str, timeline: &'static str, points: &[(i64, f64)]) {
+        let Some(rec) = self.rec.clone() else { return };
+        rec.reset_time();
+        let mut results = Vec::new();
+        for &(x, y) in points {
+            if y.is_finite() {
+                rec.set_time_sequence(timeline, x);
+                results.push(rec.log(entity, &rerun::Scalars::single(y)));
+            }
+        }
+        for result in results {
+            self.check(result);
+        }
+        self.check_connection();
+    }
+
     /// Flushes everything; call before the process ends.
     pub fn finish(&mut self) {
         if let Some(rec) = self.rec.take()

@@ -1,0 +1,521 @@
+//! `quadwalk eval`: a policy on many episodes of unseen seeds, run in
+//! parallel, measured the way the paper measures (Table I, Fig. 4) and the
+//! way a locomotion researcher judges a gait (success, distance
+//! percentiles, falls by cause), written as `eval.json`, `table1.md` and PNG
+//! figures; `--compare` lays several evaluations side by side.
+//!
+//! An episode is exactly `quadwalk rollout` with the same policy, terrain
+//! and seed: the same world (seeded by the episode's seed), the same start,
+//! the same actions.
+
+mod compare;
+mod plots;
+mod record;
+mod summary;
+mod table1;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use rayon::prelude::*;
+use robot::task::{Task, TaskConfig};
+use robot::{RobotModel, WorldConfig};
+use serde::{Deserialize, Serialize};
+use terrain_plugins::TerrainSpec;
+
+use crate::commands::{SceneArgs, make_world};
+use crate::policy::Policy;
+use crate::viz_args::RerunArgs;
+pub use plots::FIGURE_FILES;
+use record::{EpisodeRecord, EpisodeRecorder};
+use summary::Summary;
+
+/// The first episode seed unless told: far from the seeds training draws
+/// its worlds and episodes from (small integers and their derived hashes
+/// are where `train --seed` lives; these are never used there by default).
+pub const DEFAULT_FIRST_SEED: u64 = 1_000_000;
+
+/// The file every evaluation writes its measurements to.
+pub const REPORT_FILE: &str = "eval.json";
+/// The format tag inside [`REPORT_FILE`].
+const REPORT_FORMAT: &str = "quadwalk-eval/1";
+
+/// Arguments of `quadwalk eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// Policy: `scripted` (the documented crawl) or a trained checkpoint
+    /// (a run directory or one of its checkpoints; deterministic mean action)
+    #[arg(long, default_value = "scripted")]
+    policy: String,
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Episodes to run, on consecutive seeds from --seed
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    episodes: u32,
+    /// Phases per episode (0.75 s each; 400 = 5 minutes), unless it falls first
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    phases: u32,
+    /// The first episode's seed (start position, terrain draw); episode k
+    /// uses seed + k
+    #[arg(long, default_value_t = DEFAULT_FIRST_SEED)]
+    seed: u64,
+    /// Sample a trained policy's actions (seeded by the episode's seed)
+    /// instead of taking the mean
+    #[arg(long)]
+    stochastic: bool,
+    /// Worker threads, one episode each at a time [default: all cores]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    threads: Option<u32>,
+    /// Print the summary and episodes as one JSON object instead of text
+    #[arg(long)]
+    json: bool,
+    /// Where eval.json, table1.md and the figures go [default: the run
+    /// directory's eval-<terrain>-seed<seed>/, or runs/eval-scripted-... for
+    /// the crawl]
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Lay these evaluations (directories holding eval.json) side by side
+    /// instead of running one
+    #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["policy", "terrain", "config", "robot", "episodes", "phases", "seed", "stochastic", "threads"])]
+    compare: Vec<PathBuf>,
+    #[command(flatten)]
+    rerun: RerunArgs,
+}
+
+/// What an evaluation writes to [`REPORT_FILE`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct EvalReport {
+    /// [`REPORT_FORMAT`]
+    pub format: String,
+    /// the policy argument
+    pub policy: String,
+    /// the terrain spec
+    pub terrain: String,
+    /// the first episode's seed
+    pub first_seed: u64,
+    /// phases each episode could run
+    pub max_phases: usize,
+    /// whether actions were sampled
+    pub stochastic: bool,
+    /// the aggregates
+    pub summary: Summary,
+    /// every episode, in seed order
+    pub episodes: Vec<EpisodeRecord>,
+}
+
+/// One episode's setting, shared by every worker.
+struct Scene {
+    spec: TerrainSpec,
+    model: Arc<RobotModel>,
+    task: TaskConfig,
+    physics: WorldConfig,
+}
+
+/// A phase's simulated duration, s.
+fn phase_secs() -> f64 {
+    robot::action::SAMPLES_PER_PHASE as f64 * robot::DT_SECS
+}
+
+/// Runs one episode of `policy` on `scene` with `seed`: the world, start and
+/// actions of `quadwalk rollout --seed SEED`.
+fn run_episode(policy: &mut Policy, scene: &Scene, seed: u64) -> Result<EpisodeRecord> {
+    let world = make_world(
+        &scene.spec,
+        scene.model.clone(),
+        seed,
+        [0.0, 0.0],
+        &scene.physics,
+    )?;
+    let mut task = Task::new(world, scene.task.clone(), seed);
+    let mut obs = vec![0.0f32; task.observation_size()];
+    task.reset(&mut obs);
+    let start = task.start_xy_m();
+    let mut recorder = EpisodeRecorder::default();
+    let mut reward_total = 0.0;
+    while !task.done() {
+        let action = policy.action(&task, &obs)?;
+        reward_total += task
+            .step_phase_observed(&action, &mut obs, &mut recorder)
+            .reward;
+    }
+    let end = task.world().base_pose().translation.vector;
+    Ok(recorder.finish(
+        seed,
+        start,
+        [end.x, end.y],
+        task.goals_reached(),
+        reward_total,
+        phase_secs(),
+    ))
+}
+
+/// A file-name-safe form of a terrain spec.
+fn slug(spec: &str) -> String {
+    spec.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// The default output directory: inside the policy's run directory, or
+/// under `runs/` for the scripted crawl.
+fn default_out_dir(policy: &str, spec: &str, seed: u64) -> PathBuf {
+    let name = format!("eval-{}-seed{seed}", slug(spec));
+    if policy == "scripted" {
+        return Path::new("runs").join(format!("eval-scripted-{}-seed{seed}", slug(spec)));
+    }
+    let path = Path::new(policy);
+    // A run directory holds `latest`; a checkpoint lives inside its run.
+    let run = if path.join(learn::checkpoint::LATEST_LINK).exists() {
+        path
+    } else {
+        path.parent().unwrap_or(Path::new("."))
+    };
+    run.join(name)
+}
+
+/// `quadwalk eval`.
+pub fn eval(args: &EvalArgs) -> Result<()> {
+    if !args.compare.is_empty() {
+        return compare::compare(&args.compare, args.out.as_deref(), args.json);
+    }
+    let experiment = args.scene.experiment()?;
+    let (spec, mut task, mut physics) = (experiment.terrain, experiment.task, experiment.physics);
+    let sample = |seed: u64| args.stochastic.then_some(seed);
+    let policy = Policy::from_arg(&args.policy, sample(args.seed))?;
+    policy.fit_scene(&mut task, &mut physics, args.scene.config_path())?;
+    task.max_phases = args.phases as usize;
+    let scene = Scene {
+        spec: spec.clone(),
+        model: args.scene.robot()?,
+        task,
+        physics,
+    };
+    let out_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out_dir(&args.policy, &spec.to_string(), args.seed));
+    std::fs::create_dir_all(&out_dir)
+        .with_context(|| format!("--out {}: cannot create the directory", out_dir.display()))?;
+    let threads = args.threads.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        |n| n as usize,
+    );
+    let seeds: Vec<u64> = (0..args.episodes as u64)
+        .map(|k| args.seed.wrapping_add(k))
+        .collect();
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("cannot start the worker threads")?;
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let total = seeds.len();
+    let quiet = args.json;
+    let results: Vec<Result<EpisodeRecord>> = pool.install(|| {
+        seeds
+            .par_iter()
+            .map_init(
+                || Policy::from_arg(&args.policy, None),
+                |policy, &seed| {
+                    let policy = policy.as_mut().map_err(|e| anyhow!("{e:#}"))?;
+                    if args.stochastic {
+                        *policy = Policy::from_arg(&args.policy, sample(seed))?;
+                    }
+                    let record = run_episode(policy, &scene, seed)
+                        .with_context(|| format!("episode with seed {seed}"))?;
+                    let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    if !quiet {
+                        eprintln!(
+                            "episode {n}/{total} (seed {seed}): {:.2} m in {} phases{}",
+                            record.distance_m,
+                            record.phases,
+                            record
+                                .fall
+                                .as_ref()
+                                .map_or(String::new(), |f| format!(", fell: {}", f.detail))
+                        );
+                    }
+                    Ok(record)
+                },
+            )
+            .collect()
+    });
+    let episodes = results.into_iter().collect::<Result<Vec<_>>>()?;
+    let summary = Summary::of(&episodes, phase_secs());
+    let report = EvalReport {
+        format: REPORT_FORMAT.to_string(),
+        policy: args.policy.clone(),
+        terrain: spec.to_string(),
+        first_seed: args.seed,
+        max_phases: args.phases as usize,
+        stochastic: args.stochastic,
+        summary,
+        episodes,
+    };
+    write_outputs(&report, &out_dir)?;
+    log_to_rerun(&report, &args.rerun, &scene.model)?;
+    if args.json {
+        let mut value = serde_json::to_value(&report)?;
+        if let Some(episodes) = value.get_mut("episodes").and_then(|e| e.as_array_mut()) {
+            for e in episodes {
+                if let Some(o) = e.as_object_mut() {
+                    o.remove("phase_log");
+                }
+            }
+        }
+        value["out"] = serde_json::json!(out_dir.display().to_string());
+        out!("{value}");
+    } else {
+        print_report(&report, &out_dir)?;
+    }
+    Ok(())
+}
+
+/// The Table I columns of one evaluation: each terrain type, preceded by
+/// the pooled column when there is more than one.
+fn table_columns(summary: &Summary) -> Vec<&summary::TerrainSummary> {
+    let types: Vec<_> = summary.each_terrain_type().collect();
+    if types.len() > 1 {
+        summary.terrain_types.iter().collect()
+    } else {
+        types
+    }
+}
+
+fn write_outputs(report: &EvalReport, dir: &Path) -> Result<()> {
+    let path = dir.join(REPORT_FILE);
+    std::fs::write(&path, serde_json::to_string_pretty(report)?)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    let columns: Vec<(String, &summary::TerrainSummary)> = table_columns(&report.summary)
+        .into_iter()
+        .map(|t| (t.terrain.clone(), t))
+        .collect();
+    let table = format!(
+        "# Table I: {} on {} ({} episodes, seeds {}..)\n\nMean and standard deviation of the base height h_b and the mean (and standard deviation) of each foot's target landing height relative to its squat height, cm, per terrain type under the robot (`all`: every phase pooled).\n\n{}",
+        report.policy,
+        report.terrain,
+        report.summary.episodes,
+        report.first_seed,
+        table1::markdown(&columns)
+    );
+    let path = dir.join("table1.md");
+    std::fs::write(&path, table).with_context(|| format!("cannot write {}", path.display()))?;
+    let title = format!("{} on {}", report.policy_name(), report.terrain);
+    let types: Vec<_> = report.summary.each_terrain_type().collect();
+    plots::distance_per_episode(
+        &dir.join(FIGURE_FILES[0]),
+        &format!("distance per episode: {title}"),
+        &report.episodes,
+    )?;
+    plots::base_height_over_phase(
+        &dir.join(FIGURE_FILES[1]),
+        &format!("base height over the phase angle: {title}"),
+        &types,
+    )?;
+    plots::landing_height_per_foot(
+        &dir.join(FIGURE_FILES[2]),
+        &format!("target landing height per foot: {title}"),
+        &types,
+    )?;
+    Ok(())
+}
+
+impl EvalReport {
+    /// The policy's short name for titles (a path's last component).
+    fn policy_name(&self) -> String {
+        Path::new(&self.policy)
+            .file_name()
+            .map_or(self.policy.clone(), |n| n.to_string_lossy().to_string())
+    }
+
+    /// Reads a report written by `eval`.
+    pub fn read(dir: &Path) -> Result<Self> {
+        let path = dir.join(REPORT_FILE);
+        let text = std::fs::read_to_string(&path).with_context(|| {
+            format!(
+                "{}: no evaluation here (run `quadwalk eval --out {}` first)",
+                path.display(),
+                dir.display()
+            )
+        })?;
+        let report: Self = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not an evaluation report", path.display()))?;
+        if report.format != REPORT_FORMAT {
+            bail!(
+                "{}: format {:?}, this quadwalk reads {REPORT_FORMAT:?}",
+                path.display(),
+                report.format
+            );
+        }
+        Ok(report)
+    }
+}
+
+fn log_to_rerun(report: &EvalReport, rerun: &RerunArgs, model: &RobotModel) -> Result<()> {
+    let mut logger = rerun.open(
+        viz::RerunSink::Off,
+        model,
+        Path::new("quadwalk-eval.rrd"),
+        &format!("eval {} on {}", report.policy, report.terrain),
+    )?;
+    if !logger.is_active() {
+        return Ok(());
+    }
+    let distances: Vec<(i64, f64)> = report
+        .episodes
+        .iter()
+        .enumerate()
+        .map(|(k, e)| (k as i64, e.distance_m))
+        .collect();
+    logger.log_curve("eval/distance_m", "episode", &distances);
+    for t in report.summary.each_terrain_type() {
+        let name = t.terrain.replace(['/', ' '], "_");
+        let bins = |f: &dyn Fn(f64, f64) -> f64| -> Vec<(i64, f64)> {
+            t.base_height_by_angle_m
+                .iter()
+                .enumerate()
+                .filter_map(|(k, b)| Some((k as i64, 100.0 * f(b.mean?, b.std.unwrap_or(0.0)))))
+                .collect()
+        };
+        let path = format!("eval/base_height_cm/{name}");
+        logger.log_curve(&format!("{path}/mean"), "phase_angle_deg", &bins(&|m, _| m));
+        logger.log_curve(
+            &format!("{path}/mean_plus_std"),
+            "phase_angle_deg",
+            &bins(&|m, s| m + s),
+        );
+        logger.log_curve(
+            &format!("{path}/mean_minus_std"),
+            "phase_angle_deg",
+            &bins(&|m, s| m - s),
+        );
+        let landing: Vec<(i64, f64)> = robot::LegName::ALL
+            .iter()
+            .enumerate()
+            .filter_map(|(k, leg)| Some((k as i64, 100.0 * t.landing_height_m[leg.short()].mean?)))
+            .collect();
+        logger.log_curve(&format!("eval/landing_height_cm/{name}"), "foot", &landing);
+    }
+    logger.finish();
+    crate::viz_args::print_warnings(&mut logger);
+    Ok(())
+}
+
+fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
+    let s = &report.summary;
+    out!(
+        "eval            {} on {}: {} episodes x {} phases, seeds {}..{}",
+        report.policy,
+        report.terrain,
+        s.episodes,
+        report.max_phases,
+        report.first_seed,
+        report.first_seed + s.episodes as u64 - 1
+    );
+    out!(
+        "success         {}/{} ran every phase ({:.1} %)",
+        s.successes,
+        s.episodes,
+        100.0 * s.success_rate
+    );
+    let d = &s.distance_m;
+    out!(
+        "distance        mean {:.2} m, median {:.2}, p10 {:.2}, p90 {:.2} (min {:.2}, max {:.2})",
+        d.mean,
+        d.median,
+        d.p10,
+        d.p90,
+        d.min,
+        d.max
+    );
+    out!(
+        "speed           mean {:.3} m/s; phases survived mean {:.1}; goals mean {:.1}; torque mean {:.1} N m",
+        s.mean_speed_m_per_s.mean,
+        s.phases.mean,
+        s.goals_reached.mean,
+        s.mean_torque_n_m.mean
+    );
+    let falls = if s.falls_by_cause.is_empty() {
+        "none".to_string()
+    } else {
+        s.falls_by_cause
+            .iter()
+            .map(|(c, n)| format!("{c} {n}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    out!("falls           {falls}");
+    if !s.falls_by_link.is_empty() {
+        let links: Vec<_> = s
+            .falls_by_link
+            .iter()
+            .map(|(l, n)| format!("{l} {n}"))
+            .collect();
+        out!("  by link       {}", links.join(", "));
+    }
+    out!("per terrain type");
+    out!(
+        "  {:<22} {:>7} {:>10} {:>9} {:>11}",
+        "terrain",
+        "phases",
+        "distance",
+        "speed",
+        "falls/100ph"
+    );
+    for t in &s.terrain_types {
+        out!(
+            "  {:<22} {:>7} {:>8.2} m {:>5.3} m/s {:>11.2}",
+            t.terrain,
+            t.phases,
+            t.distance_m,
+            t.mean_speed_m_per_s,
+            t.falls_per_100_phases
+        );
+    }
+    let columns: Vec<(String, &summary::TerrainSummary)> = table_columns(s)
+        .into_iter()
+        .map(|t| (t.terrain.clone(), t))
+        .collect();
+    out!("Table I (cm)");
+    for line in table1::markdown(&columns).lines() {
+        out!("  {line}");
+    }
+    out!(
+        "wrote           {} ({REPORT_FILE}, table1.md, {})",
+        out_dir.display(),
+        FIGURE_FILES.join(", ")
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn output_directories_default_to_the_run_or_runs() {
+        assert_eq!(
+            default_out_dir("scripted", "varying:2m:2,5cm", 7),
+            Path::new("runs/eval-scripted-varying_2m_2_5cm-seed7")
+        );
+        let run = std::env::temp_dir().join(format!("qw-eval-run-{}", std::process::id()));
+        std::fs::create_dir_all(run.join(learn::checkpoint::LATEST_LINK)).unwrap();
+        assert_eq!(
+            default_out_dir(run.to_str().unwrap(), "elastic:5cm", 1),
+            run.join("eval-elastic_5cm-seed1")
+        );
+        assert_eq!(
+            default_out_dir(run.join("checkpoint-3").to_str().unwrap(), "rigid", 1),
+            run.join("eval-rigid-seed1")
+        );
+        std::fs::remove_dir_all(&run).unwrap();
+    }
+}

@@ -1,0 +1,131 @@
+//! What chooses a rollout's actions: the scripted crawl or a trained
+//! checkpoint, and the task settings and physics a checkpoint brings with it.
+//! Shared by `rollout`, `play` and `eval`.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use robot::WorldConfig;
+use robot::scripted::ScriptedCrawl;
+use robot::task::{ActionPrior, Task, TaskConfig};
+
+/// What chooses the actions.
+pub enum Policy {
+    /// the scripted crawl
+    Scripted(ScriptedCrawl),
+    /// a trained checkpoint, mean action
+    Trained {
+        trainer: Box<learn::Trainer>,
+        /// the task settings the policy was trained with (its observation
+        /// layout and action prior)
+        task: TaskConfig,
+        /// the physics it was trained in
+        physics: WorldConfig,
+        /// set: sample actions with this generator; unset: the mean action
+        sampler: Option<Box<rand_chacha::ChaCha8Rng>>,
+    },
+}
+
+impl Policy {
+    /// `scripted`, or a checkpoint path; `sample_seed` makes a trained
+    /// policy sample its actions.
+    pub fn from_arg(arg: &str, sample_seed: Option<u64>) -> Result<Self> {
+        if arg == "scripted" {
+            if sample_seed.is_some() {
+                bail!(
+                    "--stochastic needs a trained policy; the scripted crawl has no distribution"
+                );
+            }
+            return Ok(Self::Scripted(ScriptedCrawl::default()));
+        }
+        let path = Path::new(arg);
+        if !path.exists() {
+            bail!(
+                "policy {arg:?} is neither `scripted` nor an existing checkpoint or run directory"
+            );
+        }
+        let dir =
+            learn::checkpoint::resolve_checkpoint(path).with_context(|| format!("policy {arg}"))?;
+        let trainer = learn::Trainer::load(&dir).with_context(|| format!("policy {arg}"))?;
+        let config = crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE))
+            .with_context(|| format!("policy {arg}"))?;
+        let (task, physics) = (config.task, config.physics);
+        if trainer.policy.obs_size() != task.observation_size()
+            || trainer.policy.action_size() != robot::action::ACTION_SIZE
+        {
+            bail!(
+                "policy {arg}: its networks take {} observations and give {} actions, but its config says {} and {}",
+                trainer.policy.obs_size(),
+                trainer.policy.action_size(),
+                task.observation_size(),
+                robot::action::ACTION_SIZE
+            );
+        }
+        Ok(Self::Trained {
+            trainer: Box::new(trainer),
+            task,
+            physics,
+            sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),
+        })
+    }
+
+    /// Fits the scene's task settings and physics to the policy: a trained
+    /// policy runs with the observation layout, action prior and physics it
+    /// was trained with; the scripted crawl refuses an action prior (it is
+    /// the prior). With `strict`, set when the task settings came from the
+    /// user's own experiment file, a checkpoint whose observation or prior
+    /// differs from that file's is an error naming the file instead of
+    /// being applied silently.
+    pub fn fit_scene(
+        &self,
+        task_config: &mut TaskConfig,
+        physics: &mut WorldConfig,
+        strict: Option<&Path>,
+    ) -> Result<()> {
+        match self {
+            Self::Trained {
+                task,
+                physics: trained_in,
+                ..
+            } => {
+                if let Some(file) = strict
+                    && (task_config.observation != task.observation
+                        || task_config.action_prior != task.action_prior)
+                {
+                    bail!(
+                        "the checkpoint observes {} values (observation {:?}, action_prior {:?}) but {} sets up {} ({:?}, action_prior {:?}); evaluate it with --terrain, or with a config whose [task] matches the checkpoint's",
+                        task.observation_size(),
+                        task.observation,
+                        task.action_prior.name(),
+                        file.display(),
+                        task_config.observation_size(),
+                        task_config.observation,
+                        task_config.action_prior.name()
+                    );
+                }
+                task_config.observation = task.observation;
+                task_config.action_prior = task.action_prior;
+                *physics = trained_in.clone();
+            }
+            Self::Scripted(_) if task_config.action_prior != ActionPrior::None => bail!(
+                "--policy scripted runs the crawl itself; its config sets action_prior = {:?}, which adds the crawl to a trained policy's actions (use action_prior = \"none\")",
+                task_config.action_prior.name()
+            ),
+            Self::Scripted(_) => {}
+        }
+        Ok(())
+    }
+
+    /// The action for the task's next phase, given its observation.
+    pub fn action(&mut self, task: &Task, obs: &[f32]) -> Result<Vec<f32>> {
+        Ok(match self {
+            Self::Scripted(crawl) => crawl.act(task).to_vec(),
+            Self::Trained {
+                trainer,
+                sampler: Some(rng),
+                ..
+            } => trainer.act_stochastic(obs, rng)?,
+            Self::Trained { trainer, .. } => trainer.act_deterministic(obs)?,
+        })
+    }
+}

@@ -1,0 +1,176 @@
+//! `quadwalk eval`: its episodes are rollouts, its files are there and
+//! readable, `--compare` reads them back, bad input is refused.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use super::train::{s, scratch_dir, tiny_config, train_tiny};
+use super::{failure, json_of, scratch_file};
+
+/// `eval ARGS --json --out OUT`, which must succeed.
+fn eval_json(args: &[&str], out: &Path) -> Value {
+    let mut all = vec!["eval"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--json", "--out", s(out)]);
+    json_of(&all)
+}
+
+/// Asserts that every episode of `eval` equals `rollout` with its seed:
+/// distance, phases and termination. `scene` selects the terrain or config.
+fn assert_episodes_are_rollouts(eval: &Value, policy: &str, scene: &[&str], phases: &str) {
+    let episodes = eval["episodes"].as_array().unwrap();
+    assert!(!episodes.is_empty());
+    for e in episodes {
+        let seed = e["seed"].as_u64().unwrap().to_string();
+        let mut args = vec!["rollout", "--policy", policy];
+        args.extend_from_slice(scene);
+        args.extend_from_slice(&["--seed", &seed, "--phases", phases, "--json"]);
+        let r = json_of(&args);
+        assert_eq!(e["distance_m"], r["distance_m"], "seed {seed}");
+        assert_eq!(e["phases"], r["phases"], "seed {seed}");
+        assert_eq!(e["goals_reached"], r["goals_reached"], "seed {seed}");
+        match &e["fall"] {
+            Value::Null => assert_eq!(r["terminated"], false, "seed {seed}"),
+            fall => assert_eq!(fall["cause"], r["terminated"], "seed {seed}"),
+        }
+    }
+}
+
+#[test]
+fn eval_episodes_are_the_rollouts_of_their_seeds_and_its_files_are_written() {
+    let out = scratch_dir("eval-crawl");
+    let scene = ["--terrain", "varying:1m:2,5cm,rigid"];
+    let mut args = vec!["--policy", "scripted"];
+    args.extend_from_slice(&scene);
+    args.extend_from_slice(&["--episodes", "3", "--phases", "16", "--seed", "40"]);
+    args.extend_from_slice(&["--threads", "2"]);
+    let e = eval_json(&args, &out);
+    assert_eq!(e["summary"]["episodes"], 3);
+    let seeds: Vec<u64> = e["episodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["seed"].as_u64().unwrap())
+        .collect();
+    assert_eq!(seeds, [40, 41, 42], "episodes come back in seed order");
+    assert_episodes_are_rollouts(&e, "scripted", &scene, "16");
+    // the pooled column leads the terrain types and adds them up
+    let types = e["summary"]["terrain_types"].as_array().unwrap();
+    assert_eq!(types[0]["terrain"], "all");
+    let phases: u64 = types[1..]
+        .iter()
+        .map(|t| t["phases"].as_u64().unwrap())
+        .sum();
+    assert_eq!(types[0]["phases"].as_u64().unwrap(), phases);
+    assert_eq!(phases, 3 * 16);
+    // one thread gives the same episodes
+    let out1 = scratch_dir("eval-crawl-1");
+    let mut args1 = args.clone();
+    args1.truncate(args.len() - 2);
+    args1.extend_from_slice(&["--threads", "1"]);
+    let e1 = eval_json(&args1, &out1);
+    assert_eq!(e["episodes"], e1["episodes"]);
+
+    // the files: eval.json with every phase, Table I, three PNGs of the stated size
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).unwrap()).unwrap();
+    assert_eq!(report["format"], "quadwalk-eval/1");
+    assert_eq!(
+        report["episodes"][0]["phase_log"].as_array().unwrap().len(),
+        16
+    );
+    let table = std::fs::read_to_string(out.join("table1.md")).unwrap();
+    for row in ["| sigma(h_b) |", "| mu(h_b) |", "| mu(fr) |", "| mu(rl) |"] {
+        assert!(table.contains(row), "{row} missing in {table}");
+    }
+    for name in [
+        "distance.png",
+        "base_height_phase.png",
+        "landing_height.png",
+    ] {
+        let file = std::fs::File::open(out.join(name)).unwrap();
+        let reader = png::Decoder::new(std::io::BufReader::new(file))
+            .read_info()
+            .unwrap_or_else(|e| panic!("{name} does not decode: {e}"));
+        let info = reader.info();
+        assert_eq!((info.width, info.height), (1024, 640), "{name}");
+    }
+
+    // --compare lays both side by side
+    let c = super::quadwalk(&["eval", "--compare", s(&out), s(&out1)]);
+    let text = String::from_utf8_lossy(&c.stdout);
+    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+    assert!(text.contains("| eval-crawl | scripted |"), "{text}");
+    assert!(text.contains("| eval-crawl-1 | scripted |"), "{text}");
+    assert!(text.contains("| (cm) | eval-crawl: "), "{text}");
+    assert!(text.contains("| eval-crawl-1: "), "{text}");
+}
+
+#[test]
+fn a_fall_is_counted_by_cause_like_the_rollout_ends() {
+    // a minimum base height above the squat's: every episode falls at once
+    let config = scratch_file(
+        "eval-fall.toml",
+        "[terrain]\nspec = \"rigid\"\n\n[task]\nmin_base_height_m = 0.40\n",
+    );
+    let out = scratch_dir("eval-fall");
+    let scene = ["--config", s(&config)];
+    let mut args = vec!["--episodes", "2", "--phases", "5"];
+    args.extend_from_slice(&scene);
+    let e = eval_json(&args, &out);
+    assert_episodes_are_rollouts(&e, "scripted", &scene, "5");
+    let summary = &e["summary"];
+    assert_eq!(summary["successes"], 0);
+    assert_eq!(summary["falls_by_cause"]["base_too_low"], 2);
+    assert_eq!(e["episodes"][0]["fall"]["phase"], 0);
+    assert_eq!(e["episodes"][0]["fall"]["terrain"], "rigid");
+}
+
+#[test]
+fn a_trained_policy_evaluates_like_it_rolls_out_and_misfits_are_refused() {
+    let dir = scratch_dir("eval-trained");
+    let config = tiny_config(&dir);
+    let run = dir.join("run");
+    train_tiny(&config, &run, "1");
+    let scene = ["--terrain", "elastic:5cm"];
+    let mut args = vec!["--policy", s(&run)];
+    args.extend_from_slice(&scene);
+    args.extend_from_slice(&["--episodes", "2", "--phases", "3", "--seed", "11"]);
+    let e = eval_json(&args, &dir.join("out"));
+    assert_episodes_are_rollouts(&e, s(&run), &scene, "3");
+
+    // a config whose observation differs from the checkpoint's
+    let misfit = dir.join("misfit.toml");
+    std::fs::write(
+        &misfit,
+        "[terrain]\nspec = \"rigid\"\n\n[task.observation]\nfoot_history = false\n",
+    )
+    .unwrap();
+    let err = failure(&["eval", "--policy", s(&run), "--config", s(&misfit)], 1);
+    assert!(
+        err.contains("misfit.toml") && err.contains("observes 102 values"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_eval_input_is_refused_with_what_is_wrong() {
+    let err = failure(&["eval", "--policy", "no/such/run"], 1);
+    assert!(err.contains("no/such/run"), "{err}");
+    let err = failure(&["eval", "--episodes", "0"], 2);
+    assert!(err.contains("--episodes"), "{err}");
+    let err = failure(&["eval", "--phases", "0"], 2);
+    assert!(err.contains("--phases"), "{err}");
+    let empty = scratch_dir("eval-empty");
+    let err = failure(&["eval", "--compare", s(&empty)], 1);
+    assert!(
+        err.contains("eval.json") && err.contains("no evaluation"),
+        "{err}"
+    );
+    let err = failure(&["eval", "--terrain", "elastic:-5cm"], 1);
+    assert!(
+        err.contains("elastic:-5cm") || err.contains("-5cm"),
+        "{err}"
+    );
+}

@@ -513,3 +513,40 @@ fn bench_streams_its_phase_world() {
     let content = read_rrd(&rrd);
     assert_eq!(content["phase_starts"], 2, "{content}");
 }
+
+/// `eval --rerun` logs its curves: distance per episode, Fig. 4 per terrain
+/// type and the landing heights, on their own timelines.
+#[test]
+fn eval_streams_its_curves() {
+    let rrd = scratch("eval.rrd");
+    let sink = format!("save:{}", rrd.display());
+    let out_dir = scratch("eval-out");
+    quadwalk_ok(&[
+        "eval",
+        "--terrain",
+        "elastic:2cm",
+        "--episodes",
+        "2",
+        "--phases",
+        "4",
+        "--json",
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--rerun",
+        &sink,
+    ]);
+    let content = read_rrd(&rrd);
+    let entities = strings(&content["entities"]);
+    for entity in [
+        "/eval/distance_m",
+        "/eval/base_height_cm/elastic_2cm/mean",
+        "/eval/base_height_cm/elastic_2cm/mean_plus_std",
+        "/eval/landing_height_cm/elastic_2cm",
+    ] {
+        assert!(entities.contains(&entity), "{entity} missing: {entities:?}");
+    }
+    let timelines = strings(&content["timelines"]);
+    for timeline in ["episode", "phase_angle_deg", "foot"] {
+        assert!(timelines.contains(&timeline), "{timeline}: {timelines:?}");
+    }
+}

@@ -26,7 +26,7 @@
 //! | `torque/<joint>` | `Scalars`, N m | every logged frame |
 //! | `tiles/sink_m` (one scalar per logged tile) | `Scalars` | every logged frame |
 //! | `eval/distance_m` | `Scalars`, one per episode on the `episode` timeline | end of `quadwalk eval` |
-//! | `eval/base_height_cm/<terrain>/{mean,mean_plus_std,mean_minus_std}` | `Scalars` on the `phase_angle_deg` timeline (the paper's Fig. 4) | end of `quadwalk eval` |
+//! | `eval/base_height_cm/<terrain>/{mean,mean_plus_std,mean_minus_std}` (`<terrain>`: the type's label with `:` and `,` as `_`) | `Scalars` on the `phase_angle_deg` timeline (the paper's Fig. 4) | end of `quadwalk eval` |
 //! | `eval/landing_height_cm/<terrain>` | `Scalars` on the `foot` timeline (0 FR, 1 FL, 2 RR, 3 RL) | end of `quadwalk eval` |
 //! | `train/<curve>` (mean return, distance, episode length, losses, entropy, KL, clip fraction, explained variance, phases/s) | `Scalars`, on the `iteration` timeline only | every training iteration |
 //!

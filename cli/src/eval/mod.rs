@@ -377,7 +377,7 @@ fn log_to_rerun(report: &EvalReport, rerun: &RerunArgs, model: &RobotModel) -> R
         .collect();
     logger.log_curve("eval/distance_m", "episode", &distances);
     for t in report.summary.each_terrain_type() {
-        let name = t.terrain.replace(['/', ' '], "_");
+        let name = slug(&t.terrain);
         let bins = |f: &dyn Fn(f64, f64) -> f64| -> Vec<(i64, f64)> {
             t.base_height_by_angle_m
                 .iter()

@@ -1,8 +1,15 @@
-//! Experiment files in TOML: `[terrain]`, `[task]`, `[physics]`, `[ppo]`,
-//! `[train]` and `[[curriculum]]`. Every section but the terrain is optional (defaults
+//! Experiment files in TOML: `[terrain]`, `[task]`, `[physics]`, `[algo]`,
+//! `[ppo]`, `[sac]`, `[train]` and `[[curriculum]]`. Every section but the terrain is optional (defaults
 //! where silent); unknown keys are errors.
 //!
 //! ```toml
+//! [algo]
+//! name = "ppo"            # the paper's learner; or "sac" (soft actor-critic)
+//!
+//! [sac]                   # learn::sac::SacConfig, used when algo.name = "sac"
+//! updates_per_step = 1.0  # gradient steps per transition collected
+//! buffer_size = 200000
+//!
 //! [ppo]                   # learn::PpoConfig; the paper's values are the defaults
 //! learning_rate = 2e-4
 //! steps_per_env = 40
@@ -70,14 +77,24 @@
 use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
-use learn::PpoConfig;
+use learn::sac::SacConfig;
+use learn::{Algo, PpoConfig};
 use robot::task::{ActionPrior, DistanceReward, ObservationConfig, TaskConfig};
 use robot::{PdModel, WorldConfig};
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
 
 /// The sections an experiment file may have.
-const KNOWN_SECTIONS: [&str; 6] = ["terrain", "task", "physics", "ppo", "train", "curriculum"];
+const KNOWN_SECTIONS: [&str; 8] = [
+    "terrain",
+    "task",
+    "physics",
+    "algo",
+    "ppo",
+    "sac",
+    "train",
+    "curriculum",
+];
 
 /// A parsed experiment file.
 #[derive(Debug, Clone, PartialEq)]
@@ -88,8 +105,12 @@ pub struct Experiment {
     pub task: TaskConfig,
     /// how the world is simulated (defaults where the file is silent)
     pub physics: WorldConfig,
+    /// which learner trains
+    pub algo: Algo,
     /// PPO settings
     pub ppo: PpoConfig,
+    /// SAC settings
+    pub sac: SacConfig,
     /// the training run's settings
     pub train: TrainSettings,
     /// curriculum stages, in order (empty: the terrain for all iterations)
@@ -156,6 +177,13 @@ impl TrainSettings {
     }
 }
 
+/// `[algo]`: which learner trains.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AlgoSection {
+    name: String,
+}
+
 /// One curriculum stage.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stage {
@@ -207,6 +235,30 @@ impl Experiment {
         };
         ppo.validate()
             .map_err(|e| anyhow!("config {source} [ppo]: {e}"))?;
+        let sac: SacConfig = match doc.get("sac") {
+            None => SacConfig::default(),
+            Some(value) => value
+                .clone()
+                .try_into()
+                .map_err(|e: toml::de::Error| anyhow!("config {source} [sac]: {}", e.message()))?,
+        };
+        sac.validate()
+            .map_err(|e| anyhow!("config {source} [sac]: {e}"))?;
+        let algo = match doc.get("algo") {
+            None => Algo::default(),
+            Some(value) => {
+                let section: AlgoSection =
+                    value.clone().try_into().map_err(|e: toml::de::Error| {
+                        anyhow!("config {source} [algo]: {}", e.message())
+                    })?;
+                Algo::from_name(&section.name).ok_or_else(|| {
+                    anyhow!(
+                        "config {source} [algo]: name = {:?}: must be \"ppo\" or \"sac\"",
+                        section.name
+                    )
+                })?
+            }
+        };
         let train: TrainSettings = match doc.get("train") {
             None => TrainSettings::default(),
             Some(value) => value.clone().try_into().map_err(|e: toml::de::Error| {
@@ -244,7 +296,9 @@ impl Experiment {
             terrain,
             task,
             physics,
+            algo,
             ppo,
+            sac,
             train,
             curriculum,
         })
@@ -257,7 +311,9 @@ impl Experiment {
             terrain,
             task: TaskConfig::default(),
             physics: WorldConfig::default(),
+            algo: Algo::default(),
             ppo: PpoConfig::default(),
+            sac: SacConfig::default(),
             train: TrainSettings::default(),
             curriculum: Vec::new(),
         }
@@ -323,10 +379,15 @@ impl Experiment {
             p.kd_n_m_s_per_rad,
             p.friction,
         ));
+        text.push_str(&format!("[algo]\nname = {:?}\n\n", self.algo.name()));
         let mut tables = toml::Table::new();
         tables.insert(
             "ppo".into(),
             toml::Value::try_from(&self.ppo).expect("PPO settings serialise"),
+        );
+        tables.insert(
+            "sac".into(),
+            toml::Value::try_from(&self.sac).expect("SAC settings serialise"),
         );
         tables.insert(
             "train".into(),

@@ -13,9 +13,9 @@ use robot::task::{ActionPrior, Task, TaskConfig};
 pub enum Policy {
     /// the scripted crawl
     Scripted(ScriptedCrawl),
-    /// a trained checkpoint, mean action
+    /// a trained checkpoint (PPO or SAC), mean action
     Trained {
-        trainer: Box<learn::Trainer>,
+        learner: Box<learn::Learner>,
         /// the task settings the policy was trained with (its observation
         /// layout and action prior)
         task: TaskConfig,
@@ -46,23 +46,23 @@ impl Policy {
         }
         let dir =
             learn::checkpoint::resolve_checkpoint(path).with_context(|| format!("policy {arg}"))?;
-        let trainer = learn::Trainer::load(&dir).with_context(|| format!("policy {arg}"))?;
+        let learner = learn::Learner::load(&dir).with_context(|| format!("policy {arg}"))?;
         let config = crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE))
             .with_context(|| format!("policy {arg}"))?;
         let (task, physics) = (config.task, config.physics);
-        if trainer.policy.obs_size() != task.observation_size()
-            || trainer.policy.action_size() != robot::action::ACTION_SIZE
+        if learner.obs_size() != task.observation_size()
+            || learner.action_size() != robot::action::ACTION_SIZE
         {
             bail!(
                 "policy {arg}: its networks take {} observations and give {} actions, but its config says {} and {}",
-                trainer.policy.obs_size(),
-                trainer.policy.action_size(),
+                learner.obs_size(),
+                learner.action_size(),
                 task.observation_size(),
                 robot::action::ACTION_SIZE
             );
         }
         Ok(Self::Trained {
-            trainer: Box::new(trainer),
+            learner: Box::new(learner),
             task,
             physics,
             sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),
@@ -121,11 +121,11 @@ impl Policy {
         Ok(match self {
             Self::Scripted(crawl) => crawl.act(task).to_vec(),
             Self::Trained {
-                trainer,
+                learner,
                 sampler: Some(rng),
                 ..
-            } => trainer.act_stochastic(obs, rng)?,
-            Self::Trained { trainer, .. } => trainer.act_deterministic(obs)?,
+            } => learner.act_stochastic(obs, rng)?,
+            Self::Trained { learner, .. } => learner.act_deterministic(obs)?,
         })
     }
 }

@@ -1,4 +1,4 @@
-//! `quadwalk train`: PPO on N parallel worlds, a progress line per
+//! `quadwalk train`: PPO (the paper's) or SAC on N parallel worlds, a progress line per
 //! iteration, `metrics.jsonl`, atomic checkpoints (every N iterations, at
 //! the end and on Ctrl-C), `--resume`, curriculum stages, and the rollouts
 //! of chosen environments streamed to Rerun with the training curves.
@@ -8,8 +8,8 @@
 //! | path | content |
 //! | --- | --- |
 //! | `config.toml` | the resolved experiment (every setting spelt out) |
-//! | `metrics.jsonl` | one JSON object per iteration (the statistics of `learn::IterationStats`) |
-//! | `checkpoints/iter-NNNNNN/` | `weights.safetensors`, `state.toml`, `config.toml` |
+//! | `metrics.jsonl` | one JSON object per iteration (the statistics of `learn::IterationStats` or `learn::sac::SacStats`) |
+//! | `checkpoints/iter-NNNNNN/` | `weights.safetensors`, `state.toml`, `config.toml` (SAC: and `replay.safetensors`) |
 //! | `latest` | link to the newest checkpoint |
 
 use std::fs;
@@ -25,7 +25,8 @@ use learn::checkpoint::{
     point_latest, remove_partial_saves, resolve_checkpoint, write_dir_atomically,
     write_file_atomically,
 };
-use learn::{IterationStats, Trainer};
+use learn::sac::SacAgent;
+use learn::{Algo, Learner, LearnerStats, Trainer};
 use serde_json::json;
 use viz::RerunSink;
 
@@ -44,6 +45,9 @@ pub const METRICS_FILE: &str = "metrics.jsonl";
 pub struct TrainArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    /// Learner: ppo (the paper's) or sac [default: ppo, or the config's algo.name]
+    #[arg(long, value_parser = parse_algo, conflicts_with = "resume")]
+    algo: Option<Algo>,
     /// Parallel environments [default: 16, or the config's train.envs]
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=4096), conflicts_with = "resume")]
     envs: Option<u64>,
@@ -75,11 +79,16 @@ pub struct TrainArgs {
     rerun: RerunArgs,
 }
 
+/// Parses `--algo`.
+fn parse_algo(text: &str) -> Result<Algo, String> {
+    Algo::from_name(text).ok_or_else(|| format!("{text:?} is not a learner: use ppo or sac"))
+}
+
 /// Everything a run needs, resolved from flags, config file or checkpoint.
 struct Plan {
     experiment: Experiment,
     run_dir: PathBuf,
-    trainer: Trainer,
+    trainer: Learner,
     threads: usize,
 }
 
@@ -146,7 +155,7 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
         let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
         let mut experiment = Experiment::from_file(&checkpoint.join(CONFIG_FILE))?;
         let trainer =
-            Trainer::load(&checkpoint).with_context(|| format!("--resume {}", resume.display()))?;
+            Learner::load(&checkpoint).with_context(|| format!("--resume {}", resume.display()))?;
         // checkpoints/iter-N -> the run directory two levels up
         let run_dir = checkpoint
             .parent()
@@ -187,6 +196,9 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
     if let Some(seed) = args.seed {
         experiment.train.seed = seed;
     }
+    if let Some(algo) = args.algo {
+        experiment.algo = algo;
+    }
     apply_common(&mut experiment, args)?;
     let run_dir = args
         .run_dir
@@ -206,12 +218,25 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
             model.joints.len()
         );
     }
-    let trainer = Trainer::new(
-        experiment.ppo.clone(),
+    let (obs, actions, seed) = (
         experiment.task.observation_size(),
         robot::action::ACTION_SIZE,
         experiment.train.seed,
-    )?;
+    );
+    let trainer = match experiment.algo {
+        Algo::Ppo => Learner::Ppo(Box::new(Trainer::new(
+            experiment.ppo.clone(),
+            obs,
+            actions,
+            seed,
+        )?)),
+        Algo::Sac => Learner::Sac(Box::new(SacAgent::new(
+            experiment.sac.clone(),
+            obs,
+            actions,
+            seed,
+        )?)),
+    };
     Ok(Plan {
         experiment,
         run_dir,
@@ -258,7 +283,7 @@ pub fn train(args: &TrainArgs) -> Result<()> {
         threads,
     } = plan(args)?;
     let total = experiment.total_iterations();
-    let start_iteration = trainer.iteration;
+    let start_iteration = trainer.iteration();
     if start_iteration >= total {
         bail!(
             "the run in {} has done {start_iteration} of {total} iterations already; pass a larger --iterations to go on",
@@ -306,10 +331,11 @@ pub fn train(args: &TrainArgs) -> Result<()> {
     }
 
     eprintln!(
-        "training on {} with {} environments x {} phases per iteration, {threads} threads; run directory {}",
+        "training ({}) on {} with {} environments x {} phases per iteration, {threads} threads; run directory {}",
+        trainer.algo().name(),
         experiment.terrain_at(start_iteration).1,
         experiment.train.envs,
-        experiment.ppo.steps_per_env,
+        trainer.steps_per_env(),
         run_dir.display()
     );
     let started = Instant::now();
@@ -348,33 +374,19 @@ pub fn train(args: &TrainArgs) -> Result<()> {
             std::process::exit(130);
         }
         let logging_secs = env.take_logging_secs();
-        phases_done += stats.steps;
+        phases_done += stats.steps();
         let record = metrics_record(&stats, terrain, logging_secs);
         append_line(&metrics_path, &record.to_string())?;
         if args.json {
             out!("{record}");
         }
-        let curves: Vec<(String, f64)> = [
-            ("mean_return", stats.mean_episode_return),
-            ("mean_distance_m", metric(&stats, "distance_m")),
-            ("mean_episode_length", stats.mean_episode_length),
-            ("policy_loss", Some(stats.policy_loss)),
-            ("value_loss", Some(stats.value_loss)),
-            ("entropy", Some(stats.entropy)),
-            ("approx_kl", Some(stats.approx_kl)),
-            ("clip_fraction", Some(stats.clip_fraction)),
-            ("explained_variance", Some(stats.explained_variance)),
-            ("phases_per_s", Some(stats.steps_per_sec)),
-        ]
-        .into_iter()
-        .filter_map(|(n, v)| v.map(|v| (n.to_string(), v)))
-        .collect();
+        let curves = training_curves(&stats);
         for l in env.loggers_mut() {
-            l.logger.log_training(stats.iteration as i64, &curves);
+            l.logger.log_training(stats.iteration() as i64, &curves);
             print_warnings(&mut l.logger);
         }
         progress(&stats, total, started.elapsed().as_secs_f64(), phases_done);
-        let done = stats.iteration;
+        let done = stats.iteration();
         if done % experiment.train.checkpoint_every == 0 || done == total {
             save_checkpoint(
                 &run_dir,
@@ -400,73 +412,126 @@ fn finish_loggers(env: &mut TaskEnv) {
     }
 }
 
-fn metric(stats: &IterationStats, name: &str) -> Option<f64> {
-    stats
-        .episode_metrics
-        .iter()
-        .find(|(n, _)| n == name)
-        .and_then(|(_, v)| *v)
+/// The curves streamed to Rerun per iteration.
+fn training_curves(stats: &LearnerStats) -> Vec<(String, f64)> {
+    let (mean_return, mean_length) = stats.episode_means();
+    let mut curves = vec![
+        ("mean_return", mean_return),
+        ("mean_distance_m", stats.episode_metric("distance_m")),
+        ("mean_episode_length", mean_length),
+    ];
+    match stats {
+        LearnerStats::Ppo(s) => curves.extend([
+            ("policy_loss", Some(s.policy_loss)),
+            ("value_loss", Some(s.value_loss)),
+            ("entropy", Some(s.entropy)),
+            ("approx_kl", Some(s.approx_kl)),
+            ("clip_fraction", Some(s.clip_fraction)),
+            ("explained_variance", Some(s.explained_variance)),
+        ]),
+        LearnerStats::Sac(s) => curves.extend([
+            ("critic_loss", s.critic_loss),
+            ("actor_loss", s.actor_loss),
+            ("alpha", Some(s.alpha)),
+            ("entropy", s.entropy),
+        ]),
+    }
+    curves.push(("phases_per_s", Some(stats.steps_per_sec())));
+    curves
+        .into_iter()
+        .filter_map(|(n, v)| v.map(|v| (n.to_string(), v)))
+        .collect()
 }
 
 /// The JSON line of one iteration.
 fn metrics_record(
-    stats: &IterationStats,
+    stats: &LearnerStats,
     terrain: &terrain_plugins::TerrainSpec,
     logging_secs: f64,
 ) -> serde_json::Value {
-    let terms: serde_json::Map<String, serde_json::Value> = stats
-        .reward_terms
+    let (mean_step_reward, reward_terms) = stats.step_rewards();
+    let terms: serde_json::Map<String, serde_json::Value> = reward_terms
         .iter()
         .map(|(n, v)| (n.clone(), json!(v)))
         .collect();
-    json!({
-        "iteration": stats.iteration,
+    let (episodes, terminated) = stats.episodes();
+    let (mean_return, mean_length) = stats.episode_means();
+    let mut record = json!({
+        "iteration": stats.iteration(),
         "terrain": terrain.to_string(),
-        "phases": stats.steps,
-        "episodes": stats.episodes,
-        "terminated": stats.terminated,
-        "mean_return": stats.mean_episode_return,
-        "mean_episode_length": stats.mean_episode_length,
-        "mean_distance_m": metric(stats, "distance_m"),
-        "mean_goals_reached": metric(stats, "goals_reached"),
-        "mean_phase_reward": stats.mean_step_reward,
+        "phases": stats.steps(),
+        "episodes": episodes,
+        "terminated": terminated,
+        "mean_return": mean_return,
+        "mean_episode_length": mean_length,
+        "mean_distance_m": stats.episode_metric("distance_m"),
+        "mean_goals_reached": stats.episode_metric("goals_reached"),
+        "mean_phase_reward": mean_step_reward,
         "reward_terms": terms,
-        "policy_loss": stats.policy_loss,
-        "value_loss": stats.value_loss,
-        "entropy": stats.entropy,
-        "approx_kl": stats.approx_kl,
-        "clip_fraction": stats.clip_fraction,
-        "explained_variance": stats.explained_variance,
-        "grad_norm_actor": stats.grad_norm.0,
-        "grad_norm_critic": stats.grad_norm.1,
-        "action_std": stats.action_std,
-        "epochs": stats.epochs,
-        "phases_per_s": stats.steps_per_sec,
-        "secs": {
-            "env": stats.env_secs - logging_secs,
-            "logging": logging_secs,
-            "inference": stats.inference_secs,
-            "update": stats.update_secs,
-        },
-    })
+        "phases_per_s": stats.steps_per_sec(),
+    });
+    let fields = match stats {
+        LearnerStats::Ppo(s) => json!({
+            "policy_loss": s.policy_loss,
+            "value_loss": s.value_loss,
+            "entropy": s.entropy,
+            "approx_kl": s.approx_kl,
+            "clip_fraction": s.clip_fraction,
+            "explained_variance": s.explained_variance,
+            "grad_norm_actor": s.grad_norm.0,
+            "grad_norm_critic": s.grad_norm.1,
+            "action_std": s.action_std,
+            "epochs": s.epochs,
+            "secs": {
+                "env": s.env_secs - logging_secs,
+                "logging": logging_secs,
+                "inference": s.inference_secs,
+                "update": s.update_secs,
+            },
+        }),
+        LearnerStats::Sac(s) => json!({
+            "total_phases": s.total_steps,
+            "updates": s.updates,
+            "critic_loss": s.critic_loss,
+            "actor_loss": s.actor_loss,
+            "alpha": s.alpha,
+            "entropy": s.entropy,
+            "secs": {
+                "env": s.env_secs - logging_secs,
+                "logging": logging_secs,
+                "update": s.update_secs,
+            },
+        }),
+    };
+    if let (Some(record), Some(fields)) = (record.as_object_mut(), fields.as_object()) {
+        record.extend(fields.clone());
+    }
+    record
 }
 
 /// One progress line per iteration on stderr.
-fn progress(stats: &IterationStats, total: u64, elapsed_secs: f64, phases_done: usize) {
+fn progress(stats: &LearnerStats, total: u64, elapsed_secs: f64, phases_done: usize) {
     let width = 20;
-    let filled = (stats.iteration as usize * width / total.max(1) as usize).min(width);
+    let iteration = stats.iteration();
+    let filled = (iteration as usize * width / total.max(1) as usize).min(width);
     let bar: String = "#".repeat(filled) + &".".repeat(width - filled);
     let fmt = |v: Option<f64>, unit: &str| v.map_or("-".to_string(), |v| format!("{v:.2}{unit}"));
     let rate = phases_done as f64 / elapsed_secs.max(1e-9);
+    let (mean_return, mean_length) = stats.episode_means();
+    let learner = match stats {
+        LearnerStats::Ppo(s) => format!("kl {:.4} | ev {:.2}", s.approx_kl, s.explained_variance),
+        LearnerStats::Sac(s) => format!(
+            "alpha {:.3} | q loss {} | updates {}",
+            s.alpha,
+            fmt(s.critic_loss, ""),
+            s.updates
+        ),
+    };
     eprintln!(
-        "[{bar}] iter {}/{total} | {:.1} phases/s | return {} | distance {} | length {} | kl {:.4} | ev {:.2}",
-        stats.iteration,
-        rate,
-        fmt(stats.mean_episode_return, ""),
-        fmt(metric(stats, "distance_m"), " m"),
-        fmt(stats.mean_episode_length, ""),
-        stats.approx_kl,
-        stats.explained_variance,
+        "[{bar}] iter {iteration}/{total} | {rate:.1} phases/s | return {} | distance {} | length {} | {learner}",
+        fmt(mean_return, ""),
+        fmt(stats.episode_metric("distance_m"), " m"),
+        fmt(mean_length, ""),
     );
 }
 

@@ -84,29 +84,228 @@ fn unhex32(text: &str) -> Option<[u8; 32]> {
     Some(out)
 }
 
+/// A checkpoint file's path and what is wrong with it, as an error.
+pub(crate) fn bad_file(dir: &Path, file: &str, what: String) -> LearnError {
+    LearnError::Checkpoint(format!("{}: {what}", dir.join(file).display()))
+}
+
+/// Reads and parses `dir/state.toml`.
+pub(crate) fn read_state<T: serde::de::DeserializeOwned>(dir: &Path) -> Result<T, LearnError> {
+    let text = fs::read_to_string(dir.join(STATE_FILE))
+        .map_err(|e| bad_file(dir, STATE_FILE, format!("cannot read it: {e}")))?;
+    toml::from_str(&text).map_err(|e| {
+        bad_file(
+            dir,
+            STATE_FILE,
+            format!("not a valid state file: {}", e.message()),
+        )
+    })
+}
+
+/// Serialises `value` as a state file.
+pub(crate) fn state_text<T: Serialize>(value: &T) -> Result<Vec<u8>, LearnError> {
+    toml::to_string(value)
+        .map(String::into_bytes)
+        .map_err(|e| LearnError::Checkpoint(format!("cannot serialise the state: {e}")))
+}
+
+/// Serialises named tensors as a safetensors file.
+pub(crate) fn tensors_file(tensors: Vec<(String, Tensor)>) -> Result<Vec<u8>, LearnError> {
+    safetensors::serialize(tensors, None)
+        .map_err(|e| LearnError::Checkpoint(format!("cannot serialise the weights: {e}")))
+}
+
+/// Reads `dir/file` and checks it against the FNV-1a 64 checksum the state
+/// file recorded (hex).
+pub(crate) fn read_checksummed(
+    dir: &Path,
+    file: &str,
+    recorded_hex: &str,
+) -> Result<Vec<u8>, LearnError> {
+    let bytes = fs::read(dir.join(file))
+        .map_err(|e| bad_file(dir, file, format!("cannot read it: {e}")))?;
+    let checksum = format!("{:016x}", fnv1a64(&bytes));
+    if checksum != recorded_hex {
+        return Err(bad_file(
+            dir,
+            file,
+            format!(
+                "checksum {checksum} differs from {recorded_hex} recorded in {STATE_FILE}: the file is damaged or truncated"
+            ),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// Shape-, type- and value-checked access to the tensors of a checkpoint's
+/// safetensors file.
+pub(crate) struct TensorFile<'a> {
+    tensors: SafeTensors<'a>,
+    dir: &'a Path,
+    file: &'a str,
+}
+
+impl<'a> TensorFile<'a> {
+    /// Parses `bytes`, read from `dir/file`.
+    pub(crate) fn parse(bytes: &'a [u8], dir: &'a Path, file: &'a str) -> Result<Self, LearnError> {
+        let tensors = SafeTensors::deserialize(bytes)
+            .map_err(|e| bad_file(dir, file, format!("not a safetensors file: {e}")))?;
+        Ok(Self { tensors, dir, file })
+    }
+
+    /// The tensor `name`, which must have `shape` and `dtype`.
+    pub(crate) fn get(
+        &self,
+        name: &str,
+        shape: &[usize],
+        dtype: DType,
+    ) -> Result<Tensor, LearnError> {
+        let bad = |what: String| bad_file(self.dir, self.file, what);
+        let view = self
+            .tensors
+            .tensor(name)
+            .map_err(|_| bad(format!("tensor {name:?} is missing")))?;
+        if view.shape() != shape {
+            return Err(bad(format!(
+                "tensor {name:?} has shape {:?}, the configuration needs {shape:?}",
+                view.shape()
+            )));
+        }
+        let tensor = candle_core::safetensors::Load::load(&view, &Device::Cpu)?;
+        if tensor.dtype() != dtype {
+            return Err(bad(format!(
+                "tensor {name:?} is {:?}, expected {dtype:?}",
+                tensor.dtype()
+            )));
+        }
+        Ok(tensor)
+    }
+
+    /// [`Self::get`] for an `f32` tensor whose values must all be finite.
+    pub(crate) fn get_finite(&self, name: &str, shape: &[usize]) -> Result<Tensor, LearnError> {
+        let t = self.get(name, shape, DType::F32)?;
+        let values: Vec<f32> = t.flatten_all()?.to_vec1()?;
+        if values.iter().all(|v| v.is_finite()) {
+            Ok(t)
+        } else {
+            Err(bad_file(
+                self.dir,
+                self.file,
+                format!("tensor {name:?} holds a non-finite value"),
+            ))
+        }
+    }
+
+    /// Loads every var of `vars` (shapes from the vars themselves).
+    pub(crate) fn load_vars(&self, vars: &[(String, Var)]) -> Result<(), LearnError> {
+        for (name, var) in vars {
+            var.set(&self.get_finite(name, var.as_tensor().dims())?)?;
+        }
+        Ok(())
+    }
+
+    /// Loads Adam's moments (`<prefix>.m.NAME`, `<prefix>.v.NAME`) and sets its step.
+    pub(crate) fn load_adam(
+        &self,
+        adam: &mut Adam,
+        prefix: &str,
+        step: u64,
+    ) -> Result<(), LearnError> {
+        adam.step = step;
+        let names: Vec<(String, Var)> = adam.vars().to_vec();
+        for (k, (name, var)) in names.iter().enumerate() {
+            let dims = var.as_tensor().dims();
+            adam.m[k] = self.get_finite(&format!("{prefix}.m.{name}"), dims)?;
+            adam.v[k] = self.get_finite(&format!("{prefix}.v.{name}"), dims)?;
+        }
+        Ok(())
+    }
+
+    /// The observation normaliser saved as `obs_norm.mean` / `obs_norm.var`.
+    pub(crate) fn load_normalizer(
+        &self,
+        size: usize,
+        count: f64,
+        clip: f64,
+    ) -> Result<ObsNormalizer, LearnError> {
+        let mean: Vec<f64> = self.get("obs_norm.mean", &[size], DType::F64)?.to_vec1()?;
+        let var: Vec<f64> = self.get("obs_norm.var", &[size], DType::F64)?.to_vec1()?;
+        ObsNormalizer::from_parts(mean, var, count, clip)
+            .map_err(|e| bad_file(self.dir, self.file, e.to_string()))
+    }
+}
+
+/// Adam's moments as named tensors `<prefix>.m.NAME`, `<prefix>.v.NAME`.
+pub(crate) fn adam_tensors(adam: &Adam, prefix: &str) -> Vec<(String, Tensor)> {
+    adam.vars()
+        .iter()
+        .enumerate()
+        .flat_map(|(k, (name, _))| {
+            [
+                (format!("{prefix}.m.{name}"), adam.m[k].clone()),
+                (format!("{prefix}.v.{name}"), adam.v[k].clone()),
+            ]
+        })
+        .collect()
+}
+
+/// The normaliser as named tensors `obs_norm.mean`, `obs_norm.var` (f64).
+pub(crate) fn normalizer_tensors(n: &ObsNormalizer) -> Result<Vec<(String, Tensor)>, LearnError> {
+    let device = Device::Cpu;
+    Ok(vec![
+        (
+            "obs_norm.mean".into(),
+            Tensor::from_slice(&n.mean, n.size(), &device)?,
+        ),
+        (
+            "obs_norm.var".into(),
+            Tensor::from_slice(&n.var, n.size(), &device)?,
+        ),
+    ])
+}
+
+/// A generator's position as the state file records it: (seed hex, stream,
+/// word position as decimal text).
+pub(crate) fn rng_fields(rng: &RngState) -> (String, u64, String) {
+    (hex(&rng.seed), rng.stream, rng.word_pos.to_string())
+}
+
+/// The generator position recorded by [`rng_fields`].
+pub(crate) fn rng_from_fields(
+    dir: &Path,
+    seed_hex: &str,
+    stream: u64,
+    word_pos: &str,
+) -> Result<RngState, LearnError> {
+    let seed = unhex32(seed_hex)
+        .ok_or_else(|| bad_file(dir, STATE_FILE, "rng_seed_hex is not 64 hex digits".into()))?;
+    let word_pos: u128 = word_pos.parse().map_err(|_| {
+        bad_file(
+            dir,
+            STATE_FILE,
+            format!("rng_word_pos {word_pos:?} is not a number"),
+        )
+    })?;
+    Ok(RngState {
+        seed,
+        stream,
+        word_pos,
+    })
+}
+
 impl Trainer {
     /// The checkpoint's files (name, bytes), ready for [`write_dir_atomically`].
     pub fn checkpoint_files(&self) -> Result<Vec<(String, Vec<u8>)>, LearnError> {
-        let mut tensors: Vec<(String, Tensor)> = Vec::new();
-        for (name, var) in self.policy.named_vars() {
-            tensors.push((name, var.as_tensor().clone()));
-        }
-        let device = Device::Cpu;
-        tensors.push((
-            "obs_norm.mean".into(),
-            Tensor::from_slice(&self.normalizer.mean, self.normalizer.size(), &device)?,
-        ));
-        tensors.push((
-            "obs_norm.var".into(),
-            Tensor::from_slice(&self.normalizer.var, self.normalizer.size(), &device)?,
-        ));
-        for (k, (name, _)) in self.adam.vars().iter().enumerate() {
-            tensors.push((format!("adam.m.{name}"), self.adam.m[k].clone()));
-            tensors.push((format!("adam.v.{name}"), self.adam.v[k].clone()));
-        }
-        let weights = safetensors::serialize(tensors, None)
-            .map_err(|e| LearnError::Checkpoint(format!("cannot serialise the weights: {e}")))?;
-        let rng = self.rng_state();
+        let mut tensors: Vec<(String, Tensor)> = self
+            .policy
+            .named_vars()
+            .into_iter()
+            .map(|(name, var)| (name, var.as_tensor().clone()))
+            .collect();
+        tensors.extend(normalizer_tensors(&self.normalizer)?);
+        tensors.extend(adam_tensors(&self.adam, "adam"));
+        let weights = tensors_file(tensors)?;
+        let (rng_seed_hex, rng_stream, rng_word_pos) = rng_fields(&self.rng_state());
         let state = StateFile {
             format: FORMAT_VERSION,
             iteration: self.iteration,
@@ -115,17 +314,15 @@ impl Trainer {
             action_size: self.policy.action_size(),
             adam_step: self.adam.step,
             normalizer_count: self.normalizer.count,
-            rng_seed_hex: hex(&rng.seed),
-            rng_stream: rng.stream,
-            rng_word_pos: rng.word_pos.to_string(),
+            rng_seed_hex,
+            rng_stream,
+            rng_word_pos,
             weights_fnv1a64: format!("{:016x}", fnv1a64(&weights)),
             ppo: self.config.clone(),
         };
-        let state = toml::to_string(&state)
-            .map_err(|e| LearnError::Checkpoint(format!("cannot serialise the state: {e}")))?;
         Ok(vec![
             (WEIGHTS_FILE.into(), weights),
-            (STATE_FILE.into(), state.into_bytes()),
+            (STATE_FILE.into(), state_text(&state)?),
         ])
     }
 
@@ -133,19 +330,10 @@ impl Trainer {
     /// directory or link whose `latest` names one).
     pub fn load(dir: &Path) -> Result<Self, LearnError> {
         let dir = resolve_checkpoint(dir)?;
-        let bad = |file: &str, what: String| {
-            LearnError::Checkpoint(format!("{}: {what}", dir.join(file).display()))
-        };
-        let state_text = fs::read_to_string(dir.join(STATE_FILE))
-            .map_err(|e| bad(STATE_FILE, format!("cannot read it: {e}")))?;
-        let state: StateFile = toml::from_str(&state_text).map_err(|e| {
-            bad(
-                STATE_FILE,
-                format!("not a valid state file: {}", e.message()),
-            )
-        })?;
+        let state: StateFile = read_state(&dir)?;
         if state.format != FORMAT_VERSION {
-            return Err(bad(
+            return Err(bad_file(
+                &dir,
                 STATE_FILE,
                 format!(
                     "format {} is not the supported {FORMAT_VERSION}",
@@ -156,118 +344,36 @@ impl Trainer {
         state
             .ppo
             .validate()
-            .map_err(|e| bad(STATE_FILE, e.to_string()))?;
-        let weights = fs::read(dir.join(WEIGHTS_FILE))
-            .map_err(|e| bad(WEIGHTS_FILE, format!("cannot read it: {e}")))?;
-        let checksum = format!("{:016x}", fnv1a64(&weights));
-        if checksum != state.weights_fnv1a64 {
-            return Err(bad(
-                WEIGHTS_FILE,
-                format!(
-                    "checksum {checksum} differs from {} recorded in {STATE_FILE}: the file is damaged or truncated",
-                    state.weights_fnv1a64
-                ),
-            ));
-        }
-        let tensors = SafeTensors::deserialize(&weights)
-            .map_err(|e| bad(WEIGHTS_FILE, format!("not a safetensors file: {e}")))?;
-        let device = Device::Cpu;
-        let get = |name: &str, shape: &[usize], dtype: DType| -> Result<Tensor, LearnError> {
-            let view = tensors
-                .tensor(name)
-                .map_err(|_| bad(WEIGHTS_FILE, format!("tensor {name:?} is missing")))?;
-            if view.shape() != shape {
-                return Err(bad(
-                    WEIGHTS_FILE,
-                    format!(
-                        "tensor {name:?} has shape {:?}, the configuration needs {shape:?}",
-                        view.shape()
-                    ),
-                ));
-            }
-            let tensor = candle_core::safetensors::Load::load(&view, &device)?;
-            if tensor.dtype() != dtype {
-                return Err(bad(
-                    WEIGHTS_FILE,
-                    format!(
-                        "tensor {name:?} is {:?}, expected {dtype:?}",
-                        tensor.dtype()
-                    ),
-                ));
-            }
-            Ok(tensor)
-        };
-        let seed = unhex32(&state.rng_seed_hex)
-            .ok_or_else(|| bad(STATE_FILE, "rng_seed_hex is not 64 hex digits".into()))?;
-        let word_pos: u128 = state.rng_word_pos.parse().map_err(|_| {
-            bad(
-                STATE_FILE,
-                format!("rng_word_pos {:?} is not a number", state.rng_word_pos),
-            )
-        })?;
-
+            .map_err(|e| bad_file(&dir, STATE_FILE, e.to_string()))?;
+        let weights = read_checksummed(&dir, WEIGHTS_FILE, &state.weights_fnv1a64)?;
+        let file = TensorFile::parse(&weights, &dir, WEIGHTS_FILE)?;
+        let rng = rng_from_fields(
+            &dir,
+            &state.rng_seed_hex,
+            state.rng_stream,
+            &state.rng_word_pos,
+        )?;
         // fresh networks of the recorded shape, then every value replaced
-        let mut trainer = Trainer::new(
+        let trainer = Trainer::new(
             state.ppo.clone(),
             state.obs_size,
             state.action_size,
             state.seed,
         )?;
-        let finite = |name: &str, t: &Tensor| -> Result<(), LearnError> {
-            let values: Vec<f32> = t.flatten_all()?.to_vec1()?;
-            if values.iter().all(|v| v.is_finite()) {
-                Ok(())
-            } else {
-                Err(bad(
-                    WEIGHTS_FILE,
-                    format!("tensor {name:?} holds a non-finite value"),
-                ))
-            }
-        };
-        for (name, var) in trainer.policy.named_vars() {
-            let t = get(&name, var.as_tensor().dims(), DType::F32)?;
-            finite(&name, &t)?;
-            var.set(&t)?;
-        }
-        let size = state.obs_size;
-        let mean: Vec<f64> = get("obs_norm.mean", &[size], DType::F64)?.to_vec1()?;
-        let var: Vec<f64> = get("obs_norm.var", &[size], DType::F64)?.to_vec1()?;
+        file.load_vars(&trainer.policy.named_vars())?;
         let normalizer =
-            ObsNormalizer::from_parts(mean, var, state.normalizer_count, state.ppo.obs_clip)
-                .map_err(|e| bad(WEIGHTS_FILE, e.to_string()))?;
+            file.load_normalizer(state.obs_size, state.normalizer_count, state.ppo.obs_clip)?;
         let mut adam = Adam::new(trainer.policy.named_vars(), state.ppo.learning_rate)?;
-        adam.step = state.adam_step;
-        let names: Vec<(String, Var)> = adam.vars().to_vec();
-        for (k, (name, var)) in names.iter().enumerate() {
-            let m = get(
-                &format!("adam.m.{name}"),
-                var.as_tensor().dims(),
-                DType::F32,
-            )?;
-            let v = get(
-                &format!("adam.v.{name}"),
-                var.as_tensor().dims(),
-                DType::F32,
-            )?;
-            finite(name, &m)?;
-            finite(name, &v)?;
-            adam.m[k] = m;
-            adam.v[k] = v;
-        }
-        trainer = Trainer::from_parts(
+        file.load_adam(&mut adam, "adam", state.adam_step)?;
+        Ok(Trainer::from_parts(
             state.ppo,
             trainer.policy,
             adam,
             normalizer,
             state.seed,
             state.iteration,
-            RngState {
-                seed,
-                stream: state.rng_stream,
-                word_pos,
-            },
-        );
-        Ok(trainer)
+            rng,
+        ))
     }
 }
 

@@ -1,4 +1,4 @@
-//! PPO (proximal policy optimisation) on candle, over a [`VecEnv`] of flat
+//! PPO (proximal policy optimisation) and SAC (soft actor-critic) on candle, over a [`VecEnv`] of flat
 //! `f32` buffers. This crate knows nothing of robots, physics or logging:
 //! an iteration returns an [`IterationStats`] that the caller displays.
 //!
@@ -14,8 +14,10 @@
 //! | [`gae`] | generalised advantage estimation, a pure function |
 //! | [`ppo`] | the clipped objective, value loss, entropy bonus |
 //! | [`optim`] | Adam with exposed moments, gradient-norm clipping |
+//! | [`learner`] | either algorithm behind one type (train, checkpoint, act) |
 //! | [`trainer`] | collect, update, statistics; seeds |
 //! | [`checkpoint`] | atomic, checksummed checkpoints |
+//! | [`sac`] | soft actor-critic: squashed Gaussian, twin critics, temperature, replay buffer |
 //! | [`toy`] | a point-mass `VecEnv` that PPO must solve (tests, examples) |
 
 pub mod buffer;
@@ -23,15 +25,18 @@ pub mod checkpoint;
 pub mod config;
 pub mod env;
 pub mod gae;
+pub mod learner;
 pub mod normalizer;
 pub mod optim;
 pub mod policy;
 pub mod ppo;
+pub mod sac;
 pub mod toy;
 pub mod trainer;
 
 pub use config::PpoConfig;
 pub use env::{StepResult, VecEnv};
+pub use learner::{Algo, Learner, LearnerStats};
 pub use trainer::{IterationStats, Trainer};
 
 /// What can go wrong in learning.

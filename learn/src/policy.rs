@@ -76,7 +76,8 @@ impl Mlp {
         Ok(h)
     }
 
-    fn named_vars(&self, prefix: &str) -> Vec<(String, Var)> {
+    /// The layers' vars named `<prefix>.<layer>.weight` and `.bias`.
+    pub fn named_vars(&self, prefix: &str) -> Vec<(String, Var)> {
         self.layers
             .iter()
             .enumerate()

@@ -184,6 +184,136 @@ fn same_seed_same_training_and_resume_continues_bit_for_bit() {
     );
 }
 
+/// [`TINY`] learned by SAC: learning starts after 8 transitions.
+const TINY_SAC: &str = "\n[algo]\nname = \"sac\"\n\n[sac]\nhidden_sizes = [16]\nbatch_size = 8\nlearning_starts = 8\nsteps_per_env = 4\nbuffer_size = 1000\n";
+
+#[test]
+fn sac_trains_resumes_bit_for_bit_and_its_policy_runs() {
+    let dir = scratch_dir("sac");
+    let config = dir.join("sac.toml");
+    std::fs::write(&config, format!("{TINY}{TINY_SAC}")).unwrap();
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let train = |run: &Path, iterations: &str| {
+        ok(&[
+            "train",
+            "--config",
+            s(&config),
+            "--run-dir",
+            s(run),
+            "--iterations",
+            iterations,
+            "--threads",
+            "2",
+            "--rerun",
+            "off",
+        ])
+    };
+    let progress = train(&a, "3");
+    assert!(
+        progress.contains("training (sac)") && progress.contains("alpha"),
+        "{progress}"
+    );
+    train(&b, "2");
+    ok(&[
+        "train",
+        "--resume",
+        s(&b),
+        "--iterations",
+        "3",
+        "--threads",
+        "2",
+        "--rerun",
+        "off",
+    ]);
+    assert_eq!(
+        weights(&a),
+        weights(&b),
+        "a resumed SAC run differs from the uninterrupted one"
+    );
+    assert_eq!(
+        std::fs::read(a.join("latest/replay.safetensors")).unwrap(),
+        std::fs::read(b.join("latest/replay.safetensors")).unwrap()
+    );
+    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+    let m = &metrics_without_timing(&a)[2];
+    for key in [
+        "critic_loss",
+        "actor_loss",
+        "alpha",
+        "updates",
+        "reward_terms",
+    ] {
+        assert!(m.get(key).is_some(), "{key} missing in {m}");
+    }
+    assert!(m["updates"].as_u64().unwrap() > 0, "{m}");
+    let config_text = std::fs::read_to_string(a.join("config.toml")).unwrap();
+    assert!(
+        config_text.contains("[algo]\nname = \"sac\""),
+        "{config_text}"
+    );
+
+    // the trained SAC policy rolls out, evaluates and samples like a PPO one
+    let r = json_of(&[
+        "rollout",
+        "--policy",
+        s(&a),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--seed",
+        "3",
+        "--json",
+    ]);
+    assert!(r["phases"].as_u64().unwrap() >= 1, "{r}");
+    let e = json_of(&[
+        "eval",
+        "--policy",
+        s(&a),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--seed",
+        "3",
+        "--episodes",
+        "1",
+        "--json",
+        "--out",
+        s(&dir.join("eval")),
+    ]);
+    assert_eq!(e["episodes"][0]["distance_m"], r["distance_m"]);
+    let sampled = |seed: &str| {
+        json_of(&[
+            "rollout",
+            "--policy",
+            s(&a),
+            "--terrain",
+            "rigid",
+            "--phases",
+            "2",
+            "--stochastic",
+            "--seed",
+            seed,
+            "--json",
+        ])["distance_m"]
+            .clone()
+    };
+    assert_eq!(sampled("4"), sampled("4"));
+
+    // a bad learner name is refused, naming it
+    let err = failure(&["train", "--algo", "dqn", "--terrain", "rigid"], 2);
+    assert!(err.contains("dqn"), "{err}");
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[terrain]\nspec = \"rigid\"\n[algo]\nname = \"td3\"\n",
+    )
+    .unwrap();
+    let err = failure(&["train", "--config", s(&bad), "--rerun", "off"], 1);
+    assert!(err.contains("td3") && err.contains("[algo]"), "{err}");
+}
+
 #[test]
 fn trained_checkpoints_play_and_roll_out() {
     let dir = scratch_dir("play");

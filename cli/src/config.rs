@@ -35,7 +35,10 @@
 //! max_phases = 40
 //! goal_spacing_m = 2.0
 //! start_x_range_m = [-0.5, 0.5]
-//! distance_reward = "progress"   # the paper's; or "new_ground"
+//! distance_reward = "progress"   # the paper's; or "new_ground", or "forward"
+//! forward_reward_per_m = 40.0    # R_d per metre with "forward" (both ways)
+//! balance_terms = "paper"        # the paper's; or "penalty": R_o, R_s, R_t, R_r
+//!                                # shifted by their best value (standing earns ~0)
 //! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
 //!                                # action is a residual on the crawl (+27 observations)
 //!
@@ -79,7 +82,7 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 use learn::sac::SacConfig;
 use learn::{Algo, PpoConfig};
-use robot::task::{ActionPrior, DistanceReward, ObservationConfig, TaskConfig};
+use robot::task::{ActionPrior, BalanceTerms, DistanceReward, ObservationConfig, TaskConfig};
 use robot::{PdModel, WorldConfig};
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
@@ -349,7 +352,7 @@ impl Experiment {
         let t = &self.task;
         let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
             self.terrain.to_string(),
             t.goal_spacing_m,
             t.goal_reached_m,
@@ -363,6 +366,8 @@ impl Experiment {
             t.termination_reward,
             t.settle_secs,
             t.distance_reward.name(),
+            t.forward_reward_per_m,
+            t.balance_terms.name(),
             t.action_prior.name(),
             o.foot_history,
             o.short_history,
@@ -454,6 +459,8 @@ struct TaskSection {
     termination_reward: Option<f64>,
     settle_secs: Option<f64>,
     distance_reward: Option<String>,
+    forward_reward_per_m: Option<f64>,
+    balance_terms: Option<String>,
     action_prior: Option<String>,
     observation: Option<ObservationSection>,
 }
@@ -520,10 +527,25 @@ impl TaskSection {
             distance_reward: match self.distance_reward {
                 Some(name) => DistanceReward::from_name(&name).ok_or_else(|| {
                     format!(
-                        "distance_reward must be \"new_ground\" or \"progress\" (the paper's), got {name:?}"
+                        "distance_reward must be \"progress\" (the paper's), \"new_ground\" or \"forward\", got {name:?}"
                     )
                 })?,
                 None => d.distance_reward,
+            },
+            forward_reward_per_m: match self.forward_reward_per_m {
+                Some(v) if !(v.is_finite() && (0.0..=1e4).contains(&v)) => {
+                    return Err(format!("forward_reward_per_m must be in [0, 10000], got {v}"));
+                }
+                Some(v) => v,
+                None => d.forward_reward_per_m,
+            },
+            balance_terms: match self.balance_terms {
+                Some(name) => BalanceTerms::from_name(&name).ok_or_else(|| {
+                    format!(
+                        "balance_terms must be \"paper\" (the paper's) or \"penalty\", got {name:?}"
+                    )
+                })?,
+                None => d.balance_terms,
             },
             action_prior: match self.action_prior {
                 Some(name) => ActionPrior::from_name(&name).ok_or_else(|| {
@@ -671,6 +693,17 @@ mod tests {
         assert_eq!(e.task.action_prior, ActionPrior::ScriptedCrawl);
         assert_eq!(e.task.observation_size(), 102 - 36 + 27);
         assert_eq!(e.task.distance_reward, DistanceReward::NewGround);
+        let f = Experiment::from_toml(
+            "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"forward\"\nforward_reward_per_m = 30.0\nbalance_terms = \"penalty\"\n[algo]\nname = \"sac\"\n[sac]\nupdates_per_step = 2.0\n",
+            "t.toml",
+        )
+        .unwrap();
+        assert_eq!(f.task.distance_reward, DistanceReward::Forward);
+        assert_eq!(f.task.forward_reward_per_m, 30.0);
+        assert_eq!(f.task.balance_terms, BalanceTerms::Penalty);
+        assert_eq!(f.algo, learn::Algo::Sac);
+        assert_eq!(f.sac.updates_per_step, 2.0);
+        assert_eq!(Experiment::from_toml(&f.to_toml(), "round trip").unwrap(), f);
         assert_eq!(
             Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "t.toml")
                 .unwrap()
@@ -708,8 +741,8 @@ mod tests {
                 "unknown field `foot_speed`",
             ),
             (
-                "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"forward\"\n",
-                "distance_reward must be \"new_ground\" or \"progress\" (the paper's), got \"forward\"",
+                "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"backward\"\n",
+                "distance_reward must be \"progress\" (the paper's), \"new_ground\" or \"forward\", got \"backward\"",
             ),
             (
                 "[terrain]\nspec = \"rigid\"\n[task]\naction_prior = \"crawl\"\n",

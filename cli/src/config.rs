@@ -703,7 +703,10 @@ mod tests {
         assert_eq!(f.task.balance_terms, BalanceTerms::Penalty);
         assert_eq!(f.algo, learn::Algo::Sac);
         assert_eq!(f.sac.updates_per_step, 2.0);
-        assert_eq!(Experiment::from_toml(&f.to_toml(), "round trip").unwrap(), f);
+        assert_eq!(
+            Experiment::from_toml(&f.to_toml(), "round trip").unwrap(),
+            f
+        );
         assert_eq!(
             Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "t.toml")
                 .unwrap()

@@ -1,0 +1,122 @@
+//! The observation: which blocks are on and how the vector is written
+//! (the table is in the module docs of [`super`]).
+
+use nalgebra::Vector3;
+
+use super::{ActionPrior, Task};
+use crate::world::DT_SECS;
+
+/// Which optional observation blocks are on (the paper's ablations).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ObservationConfig {
+    /// foot positions at the start of the three previous phases (36 values)
+    pub foot_history: bool,
+    /// foot positions 4 and 8 ms ago (24 values)
+    pub short_history: bool,
+    /// foot velocities (12 values)
+    pub foot_velocity: bool,
+}
+
+impl Default for ObservationConfig {
+    fn default() -> Self {
+        Self {
+            foot_history: true,
+            short_history: true,
+            foot_velocity: true,
+        }
+    }
+}
+
+impl ObservationConfig {
+    /// The blocks in order, with their index ranges (see the module docs).
+    pub fn blocks(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
+        let mut sizes = vec![
+            ("hip_heights", 4),
+            ("gravity_in_base", 3),
+            ("base_linear_velocity", 3),
+            ("base_angular_velocity", 3),
+            ("pitch", 1),
+        ];
+        if self.foot_history {
+            sizes.push(("feet_at_previous_phase_starts", 36));
+        }
+        sizes.push(("feet_now", 12));
+        if self.short_history {
+            sizes.push(("feet_4_and_8_ms_ago", 24));
+        }
+        if self.foot_velocity {
+            sizes.push(("foot_velocities", 12));
+        }
+        sizes.extend([("goal_azimuth", 1), ("goal_position", 2), ("phase", 1)]);
+        let mut start = 0;
+        sizes
+            .into_iter()
+            .map(|(name, n)| {
+                start += n;
+                (name, start - n..start)
+            })
+            .collect()
+    }
+
+    /// Number of observation values with these switches.
+    pub fn size(&self) -> usize {
+        self.blocks().last().map_or(0, |(_, range)| range.end)
+    }
+}
+
+impl Task {
+    /// Writes the observation (see the module docs for the layout).
+    pub fn observe(&self, obs: &mut [f32]) {
+        let size = self.observation_size();
+        assert_eq!(obs.len(), size, "the observation has {size} values");
+        let mut out = Vec::with_capacity(size);
+        let base = self.world.base_pose();
+        let rotation_inv = base.rotation.inverse();
+        out.extend(self.hip_heights_m());
+        out.extend((rotation_inv * -Vector3::z()).iter());
+        let (lin, ang) = self.world.base_velocity();
+        out.extend((rotation_inv * lin).iter());
+        out.extend((rotation_inv * ang).iter());
+        let (_, pitch, _) = base.rotation.euler_angles();
+        out.push(pitch);
+        let now = self.feet_in_base();
+        let c = &self.config.observation;
+        if c.foot_history {
+            for feet in &self.episode.phase_start_feet {
+                out.extend(feet.iter().flat_map(|f| f.iter().copied()));
+            }
+        }
+        out.extend(now.iter().flat_map(|f| f.iter().copied()));
+        if c.short_history {
+            out.extend(
+                self.episode
+                    .feet_1_step_ago
+                    .iter()
+                    .flat_map(|f| f.iter().copied()),
+            );
+            out.extend(
+                self.episode
+                    .feet_2_steps_ago
+                    .iter()
+                    .flat_map(|f| f.iter().copied()),
+            );
+        }
+        if c.foot_velocity {
+            for (p, q) in now.iter().zip(&self.episode.feet_1_step_ago) {
+                out.extend(((p - q) / DT_SECS).iter());
+            }
+        }
+        let goal = self.goal_in_base();
+        out.push(goal.y.atan2(goal.x));
+        out.push(goal.x);
+        out.push(goal.y);
+        out.push((self.episode.phase % 4) as f64 / 4.0);
+        if self.config.action_prior != ActionPrior::None {
+            out.extend(self.prior_action().iter().map(|&a| f64::from(a)));
+        }
+        debug_assert_eq!(out.len(), size);
+        for (o, v) in obs.iter_mut().zip(out) {
+            *o = v as f32;
+        }
+    }
+}

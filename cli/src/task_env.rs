@@ -227,6 +227,10 @@ impl VecEnv for TaskEnv {
         });
     }
 
+    fn interrupted(&self) -> bool {
+        self.interrupted.load(Ordering::Relaxed)
+    }
+
     /// Steps every task one phase. After Ctrl-C no physics runs: the step
     /// returns zeros at once and the trainer discards the iteration.
     fn step(&mut self, actions: &[f32], out: &mut StepResult) {

@@ -39,6 +39,11 @@ pub trait VecEnv {
     fn reset_all(&mut self, seed: u64, obs: &mut [f32]);
     /// Applies `N x A` actions and fills `out` (see the module docs).
     fn step(&mut self, actions: &[f32], out: &mut StepResult);
+    /// Whether the run was asked to stop (Ctrl-C): a learner may then cut
+    /// its iteration short, whose results the caller discards.
+    fn interrupted(&self) -> bool {
+        false
+    }
 }
 
 /// What one [`VecEnv::step`] writes. Sized by [`StepResult::new`].

@@ -376,6 +376,9 @@ impl SacAgent {
         let (mut env_secs, mut update_secs) = (0.0f64, 0.0f64);
         let (mut loss_sums, mut updates) = ((0.0f64, 0.0f64, 0.0f64), 0usize);
         for _ in 0..self.config.steps_per_env {
+            if env.interrupted() {
+                break; // the caller discards this iteration
+            }
             self.normalizer.update(&obs);
             let actions = if (self.total_steps as usize) < self.config.learning_starts {
                 (0..n * a)
@@ -598,6 +601,66 @@ mod tests {
         for (name, v) in agent.target_critics[0].named_vars("t") {
             assert!(v.as_tensor().is_variable(), "{name} is no longer a var");
         }
+    }
+
+    /// The point mass, asked to stop after `stop_after` steps.
+    struct Interrupted {
+        inner: PointMass,
+        steps: usize,
+        stop_after: usize,
+    }
+
+    impl VecEnv for Interrupted {
+        fn num_envs(&self) -> usize {
+            self.inner.num_envs()
+        }
+        fn observation_size(&self) -> usize {
+            self.inner.observation_size()
+        }
+        fn action_size(&self) -> usize {
+            self.inner.action_size()
+        }
+        fn reward_term_names(&self) -> Vec<String> {
+            self.inner.reward_term_names()
+        }
+        fn episode_metric_names(&self) -> Vec<String> {
+            self.inner.episode_metric_names()
+        }
+        fn reset_all(&mut self, seed: u64, obs: &mut [f32]) {
+            self.inner.reset_all(seed, obs);
+        }
+        fn step(&mut self, actions: &[f32], out: &mut StepResult) {
+            self.steps += 1;
+            self.inner.step(actions, out);
+        }
+        fn interrupted(&self) -> bool {
+            self.steps >= self.stop_after
+        }
+    }
+
+    #[test]
+    fn an_interrupted_environment_cuts_the_iteration_short() {
+        let mut env = Interrupted {
+            inner: PointMass::new(2, 10),
+            steps: 0,
+            stop_after: 3,
+        };
+        let mut agent = SacAgent::new(
+            SacConfig {
+                hidden_sizes: vec![8],
+                learning_starts: 1,
+                batch_size: 4,
+                steps_per_env: 1000,
+                ..SacConfig::default()
+            },
+            4,
+            2,
+            0,
+        )
+        .unwrap();
+        agent.iterate(&mut env).unwrap();
+        assert_eq!(env.steps, 3, "steps after the stop request");
+        assert_eq!(agent.total_steps, 6);
     }
 
     #[test]

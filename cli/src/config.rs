@@ -35,8 +35,9 @@
 //! max_phases = 40
 //! goal_spacing_m = 2.0
 //! start_x_range_m = [-0.5, 0.5]
-//! distance_reward = "progress"   # the paper's; or "new_ground", or "forward"
+//! distance_reward = "progress"   # the paper's; or "new_ground", "forward", "tracking"
 //! forward_reward_per_m = 40.0    # R_d per metre with "forward" (both ways)
+//! target_progress_m = 0.025      # the pace per phase "tracking" pays most for
 //! balance_terms = "paper"        # the paper's; or "penalty": R_o, R_s, R_t, R_r
 //!                                # shifted by their best value (standing earns ~0)
 //! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
@@ -352,7 +353,7 @@ impl Experiment {
         let t = &self.task;
         let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
             self.terrain.to_string(),
             t.goal_spacing_m,
             t.goal_reached_m,
@@ -367,6 +368,7 @@ impl Experiment {
             t.settle_secs,
             t.distance_reward.name(),
             t.forward_reward_per_m,
+            t.target_progress_m,
             t.balance_terms.name(),
             t.action_prior.name(),
             o.foot_history,
@@ -460,6 +462,7 @@ struct TaskSection {
     settle_secs: Option<f64>,
     distance_reward: Option<String>,
     forward_reward_per_m: Option<f64>,
+    target_progress_m: Option<f64>,
     balance_terms: Option<String>,
     action_prior: Option<String>,
     observation: Option<ObservationSection>,
@@ -527,7 +530,7 @@ impl TaskSection {
             distance_reward: match self.distance_reward {
                 Some(name) => DistanceReward::from_name(&name).ok_or_else(|| {
                     format!(
-                        "distance_reward must be \"progress\" (the paper's), \"new_ground\" or \"forward\", got {name:?}"
+                        "distance_reward must be \"progress\" (the paper's), \"new_ground\", \"forward\" or \"tracking\", got {name:?}"
                     )
                 })?,
                 None => d.distance_reward,
@@ -539,6 +542,11 @@ impl TaskSection {
                 Some(v) => v,
                 None => d.forward_reward_per_m,
             },
+            target_progress_m: positive(
+                "target_progress_m",
+                self.target_progress_m,
+                d.target_progress_m,
+            )?,
             balance_terms: match self.balance_terms {
                 Some(name) => BalanceTerms::from_name(&name).ok_or_else(|| {
                     format!(
@@ -694,12 +702,13 @@ mod tests {
         assert_eq!(e.task.observation_size(), 102 - 36 + 27);
         assert_eq!(e.task.distance_reward, DistanceReward::NewGround);
         let f = Experiment::from_toml(
-            "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"forward\"\nforward_reward_per_m = 30.0\nbalance_terms = \"penalty\"\n[algo]\nname = \"sac\"\n[sac]\nupdates_per_step = 2.0\n",
+            "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"forward\"\nforward_reward_per_m = 30.0\ntarget_progress_m = 0.03\nbalance_terms = \"penalty\"\n[algo]\nname = \"sac\"\n[sac]\nupdates_per_step = 2.0\n",
             "t.toml",
         )
         .unwrap();
         assert_eq!(f.task.distance_reward, DistanceReward::Forward);
         assert_eq!(f.task.forward_reward_per_m, 30.0);
+        assert_eq!(f.task.target_progress_m, 0.03);
         assert_eq!(f.task.balance_terms, BalanceTerms::Penalty);
         assert_eq!(f.algo, learn::Algo::Sac);
         assert_eq!(f.sac.updates_per_step, 2.0);
@@ -745,7 +754,7 @@ mod tests {
             ),
             (
                 "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"backward\"\n",
-                "distance_reward must be \"progress\" (the paper's), \"new_ground\" or \"forward\", got \"backward\"",
+                "distance_reward must be \"progress\" (the paper's), \"new_ground\", \"forward\" or \"tracking\", got \"backward\"",
             ),
             (
                 "[terrain]\nspec = \"rigid\"\n[task]\naction_prior = \"crawl\"\n",

@@ -16,6 +16,10 @@ pub enum DistanceReward {
     /// `forward_reward_per_m` x progress toward the goal, the same weight
     /// both ways.
     Forward,
+    /// exp(-((p - p*) / (p* / 2))^2) for a phase's progress p toward the goal
+    /// and the target `target_progress_m` p*: at most 1 per phase, earned
+    /// at the target pace, nothing for standing or for a lunge.
+    Tracking,
 }
 
 impl DistanceReward {
@@ -25,6 +29,7 @@ impl DistanceReward {
             Self::Progress => "progress",
             Self::NewGround => "new_ground",
             Self::Forward => "forward",
+            Self::Tracking => "tracking",
         }
     }
 
@@ -34,6 +39,7 @@ impl DistanceReward {
             "progress" => Some(Self::Progress),
             "new_ground" => Some(Self::NewGround),
             "forward" => Some(Self::Forward),
+            "tracking" => Some(Self::Tracking),
             _ => None,
         }
     }
@@ -134,6 +140,8 @@ pub struct TaskConfig {
     pub distance_reward: DistanceReward,
     /// R_d's weight per metre with [`DistanceReward::Forward`]
     pub forward_reward_per_m: f64,
+    /// the progress per phase [`DistanceReward::Tracking`] pays most for, m
+    pub target_progress_m: f64,
     /// how the balance terms pay
     pub balance_terms: BalanceTerms,
     /// what the policy's action is added to
@@ -162,6 +170,7 @@ impl Default for TaskConfig {
             settle_secs: 0.5,
             distance_reward: DistanceReward::default(),
             forward_reward_per_m: 40.0,
+            target_progress_m: 0.025,
             balance_terms: BalanceTerms::default(),
             action_prior: ActionPrior::default(),
         }

@@ -48,7 +48,14 @@
 //!   ([`DistanceReward::Forward`]) pays `forward_reward_per_m` (default 40)
 //!   per metre of progress and charges the same per metre back: at 40 a
 //!   gait of 2 cm per phase (8 m in 400 phases) earns 0.8 per phase, what
-//!   standing earns from the other four terms.
+//!   standing earns from the other four terms. Measured: with the
+//!   termination's -10 this pays a lunge (SAC learned to dive 0.4 m in
+//!   three phases and fall, BENCHMARKS.md). `distance_reward = "tracking"`
+//!   ([`DistanceReward::Tracking`]) pays exp(-((p - p*) / (p*/2))^2) for a
+//!   phase's progress p and the target pace p* = `target_progress_m`
+//!   (default 2.5 cm per phase, 10 m in 400 phases): at most 1 per phase,
+//!   about 0 for standing and for a lunge (legged_gym's velocity-tracking
+//!   kernel).
 //! - `balance_terms = "penalty"` ([`BalanceTerms::Penalty`]) shifts the
 //!   other four terms by their best value (R_o - 0.2, R_s - 0.1,
 //!   R_t - 0.56, R_r - 0.2): the same shapes and gradients, but standing
@@ -441,6 +448,10 @@ impl Task {
                         goal_distance_prev,
                         rho.norm(),
                         self.config.forward_reward_per_m,
+                    ),
+                    DistanceReward::Tracking => RewardTerms::tracking_term(
+                        goal_distance_prev - rho.norm(),
+                        self.config.target_progress_m,
                     ),
                 },
                 orientation: RewardTerms::orientation_term(rho.y.atan2(rho.x)),

@@ -82,6 +82,13 @@ impl RewardTerms {
         weight_per_m * (goal_distance_prev_m - goal_distance_m)
     }
 
+    /// [`DistanceReward::Tracking`](super::DistanceReward::Tracking):
+    /// exp(-((p - p*) / (p* / 2))^2) for progress p and target p*.
+    pub fn tracking_term(progress_m: f64, target_progress_m: f64) -> f64 {
+        let sigma = 0.5 * target_progress_m;
+        (-((progress_m - target_progress_m) / sigma).powi(2)).exp()
+    }
+
     /// The best value of each balance term (R_o, R_s, R_t, R_r), what
     /// [`BalanceTerms::Penalty`] subtracts.
     pub const BALANCE_MAXIMA: [f64; 4] = [0.2, 0.1, 0.56, 0.2];
@@ -158,6 +165,12 @@ mod tests {
 
     #[test]
     fn forward_progress_and_balance_penalties() {
+        // tracking: 1 at the target pace, e^-1 at p* +- p*/2,
+        // e^-4 standing still, nothing for a 10 cm lunge
+        assert!((RewardTerms::tracking_term(0.025, 0.025) - 1.0).abs() < 1e-12);
+        assert!((RewardTerms::tracking_term(0.0375, 0.025) - (-1f64).exp()).abs() < 1e-12);
+        assert!((RewardTerms::tracking_term(0.0, 0.025) - (-4f64).exp()).abs() < 1e-12);
+        assert!(RewardTerms::tracking_term(0.10, 0.025) < 1e-15);
         // forward: the same weight both ways, so rocking nets nothing
         assert!((RewardTerms::forward_term(2.0, 1.98, 40.0) - 0.8).abs() < 1e-9);
         assert!((RewardTerms::forward_term(1.98, 2.0, 40.0) + 0.8).abs() < 1e-9);

@@ -235,6 +235,13 @@ impl<'a> TensorFile<'a> {
     }
 }
 
+/// Vars as named tensors (their current values).
+pub(crate) fn var_tensors(vars: Vec<(String, Var)>) -> Vec<(String, Tensor)> {
+    vars.into_iter()
+        .map(|(name, var)| (name, var.as_tensor().clone()))
+        .collect()
+}
+
 /// Adam's moments as named tensors `<prefix>.m.NAME`, `<prefix>.v.NAME`.
 pub(crate) fn adam_tensors(adam: &Adam, prefix: &str) -> Vec<(String, Tensor)> {
     adam.vars()
@@ -296,12 +303,7 @@ pub(crate) fn rng_from_fields(
 impl Trainer {
     /// The checkpoint's files (name, bytes), ready for [`write_dir_atomically`].
     pub fn checkpoint_files(&self) -> Result<Vec<(String, Vec<u8>)>, LearnError> {
-        let mut tensors: Vec<(String, Tensor)> = self
-            .policy
-            .named_vars()
-            .into_iter()
-            .map(|(name, var)| (name, var.as_tensor().clone()))
-            .collect();
+        let mut tensors = var_tensors(self.policy.named_vars());
         tensors.extend(normalizer_tensors(&self.normalizer)?);
         tensors.extend(adam_tensors(&self.adam, "adam"));
         let weights = tensors_file(tensors)?;

@@ -83,6 +83,24 @@ fn metrics_without_timing(run: &Path) -> Vec<Value> {
         .collect()
 }
 
+/// `train --config CONFIG --run-dir RUN --iterations N --threads 2`, which
+/// must succeed; returns its stderr.
+fn train_on_two_threads(config: &Path, run: &Path, iterations: &str) -> String {
+    ok(&[
+        "train",
+        "--config",
+        s(config),
+        "--run-dir",
+        s(run),
+        "--iterations",
+        iterations,
+        "--threads",
+        "2",
+        "--rerun",
+        "off",
+    ])
+}
+
 fn weights(run: &Path) -> Vec<u8> {
     std::fs::read(run.join("latest/weights.safetensors")).unwrap()
 }
@@ -92,21 +110,7 @@ fn same_seed_same_training_and_resume_continues_bit_for_bit() {
     let dir = scratch_dir("resume");
     let config = tiny_config(&dir);
     let (a, b, c) = (dir.join("a"), dir.join("b"), dir.join("c"));
-    let train = |run: &Path, iterations: &str| {
-        ok(&[
-            "train",
-            "--config",
-            s(&config),
-            "--run-dir",
-            s(run),
-            "--iterations",
-            iterations,
-            "--threads",
-            "2",
-            "--rerun",
-            "off",
-        ])
-    };
+    let train = |run: &Path, iterations: &str| train_on_two_threads(&config, run, iterations);
     let progress = train(&a, "3");
     assert!(
         progress.contains("iter 3/3") && progress.contains("phases/s"),
@@ -193,21 +197,7 @@ fn sac_trains_resumes_bit_for_bit_and_its_policy_runs() {
     let config = dir.join("sac.toml");
     std::fs::write(&config, format!("{TINY}{TINY_SAC}")).unwrap();
     let (a, b) = (dir.join("a"), dir.join("b"));
-    let train = |run: &Path, iterations: &str| {
-        ok(&[
-            "train",
-            "--config",
-            s(&config),
-            "--run-dir",
-            s(run),
-            "--iterations",
-            iterations,
-            "--threads",
-            "2",
-            "--rerun",
-            "off",
-        ])
-    };
+    let train = |run: &Path, iterations: &str| train_on_two_threads(&config, run, iterations);
     let progress = train(&a, "3");
     assert!(
         progress.contains("training (sac)") && progress.contains("alpha"),

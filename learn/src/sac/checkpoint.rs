@@ -24,7 +24,7 @@ use crate::LearnError;
 use crate::checkpoint::{
     FORMAT_VERSION, STATE_FILE, TensorFile, WEIGHTS_FILE, adam_tensors, bad_file, fnv1a64,
     normalizer_tensors, read_checksummed, read_state, resolve_checkpoint, rng_fields,
-    rng_from_fields, state_text, tensors_file,
+    rng_from_fields, state_text, tensors_file, var_tensors,
 };
 
 /// The replay buffer's file name.
@@ -72,11 +72,7 @@ impl SacAgent {
     /// The checkpoint's files (name, bytes), ready for
     /// [`crate::checkpoint::write_dir_atomically`].
     pub fn checkpoint_files(&self) -> Result<Vec<(String, Vec<u8>)>, LearnError> {
-        let mut tensors: Vec<(String, Tensor)> = self
-            .named_vars()
-            .into_iter()
-            .map(|(name, var)| (name, var.as_tensor().clone()))
-            .collect();
+        let mut tensors = var_tensors(self.named_vars());
         tensors.extend(normalizer_tensors(&self.normalizer)?);
         tensors.extend(adam_tensors(&self.actor_adam, "adam_actor"));
         tensors.extend(adam_tensors(&self.critic_adam, "adam_critic"));

@@ -101,6 +101,21 @@ fn train_on_two_threads(config: &Path, run: &Path, iterations: &str) -> String {
     ])
 }
 
+/// `train --resume RUN --iterations N --threads 2`, which must succeed.
+fn resume_on_two_threads(run: &Path, iterations: &str) -> String {
+    ok(&[
+        "train",
+        "--resume",
+        s(run),
+        "--iterations",
+        iterations,
+        "--threads",
+        "2",
+        "--rerun",
+        "off",
+    ])
+}
+
 fn weights(run: &Path) -> Vec<u8> {
     std::fs::read(run.join("latest/weights.safetensors")).unwrap()
 }
@@ -125,17 +140,7 @@ fn same_seed_same_training_and_resume_continues_bit_for_bit() {
     assert_eq!(metrics_without_timing(&a), metrics_without_timing(&c));
 
     train(&b, "2");
-    ok(&[
-        "train",
-        "--resume",
-        s(&b),
-        "--iterations",
-        "3",
-        "--threads",
-        "2",
-        "--rerun",
-        "off",
-    ]);
+    resume_on_two_threads(&b, "3");
     assert_eq!(
         weights(&a),
         weights(&b),
@@ -204,17 +209,7 @@ fn sac_trains_resumes_bit_for_bit_and_its_policy_runs() {
         "{progress}"
     );
     train(&b, "2");
-    ok(&[
-        "train",
-        "--resume",
-        s(&b),
-        "--iterations",
-        "3",
-        "--threads",
-        "2",
-        "--rerun",
-        "off",
-    ]);
+    resume_on_two_threads(&b, "3");
     assert_eq!(
         weights(&a),
         weights(&b),

@@ -223,12 +223,18 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
         seeds
             .par_iter()
             .map_init(
-                || Policy::from_arg(&args.policy, None),
-                |policy, &seed| {
-                    let policy = policy.as_mut().map_err(|e| anyhow!("{e:#}"))?;
-                    if args.stochastic {
-                        *policy = Policy::from_arg(&args.policy, sample(seed))?;
-                    }
+                // one mean-action policy per worker; a sampling policy is
+                // loaded per episode, its generator seeded by the episode
+                || (!args.stochastic).then(|| Policy::from_arg(&args.policy, None)),
+                |shared, &seed| {
+                    let mut own;
+                    let policy = match shared {
+                        Some(loaded) => loaded.as_mut().map_err(|e| anyhow!("{e:#}"))?,
+                        None => {
+                            own = Policy::from_arg(&args.policy, sample(seed))?;
+                            &mut own
+                        }
+                    };
                     let record = run_episode(policy, &scene, seed)
                         .with_context(|| format!("episode with seed {seed}"))?;
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;

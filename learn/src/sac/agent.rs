@@ -105,6 +105,14 @@ pub struct SacAgent {
     pub(super) rng: ChaCha8Rng,
 }
 
+/// A `rows x cols` tensor of standard normal draws from `rng`.
+fn normal_draws(rows: usize, cols: usize, rng: &mut ChaCha8Rng) -> Result<Tensor, LearnError> {
+    let draws: Vec<f32> = (0..rows * cols)
+        .map(|_| standard_normal(rng) as f32)
+        .collect();
+    Ok(Tensor::from_vec(draws, (rows, cols), &Device::Cpu)?)
+}
+
 /// A deep copy of `mlp` (a `Var`'s clone shares its storage).
 fn deep_copy(mlp: &Mlp) -> Result<Mlp, LearnError> {
     let mut copy = mlp.clone();
@@ -225,14 +233,7 @@ impl SacAgent {
 
     /// `k x A` standard normal draws from the agent's generator.
     fn noise(&mut self, k: usize) -> Result<Tensor, LearnError> {
-        let draws: Vec<f32> = (0..k * self.action_size)
-            .map(|_| standard_normal(&mut self.rng) as f32)
-            .collect();
-        Ok(Tensor::from_vec(
-            draws,
-            (k, self.action_size),
-            &Device::Cpu,
-        )?)
+        normal_draws(k, self.action_size, &mut self.rng)
     }
 
     /// The deterministic action tanh(mean) for raw observations `k x O`.
@@ -259,11 +260,7 @@ impl SacAgent {
     ) -> Result<Vec<f32>, LearnError> {
         let obs = self.obs_tensor(raw_obs)?;
         let (mean, log_std) = self.heads(&obs)?;
-        let k = raw_obs.len() / self.obs_size;
-        let draws: Vec<f32> = (0..k * self.action_size)
-            .map(|_| standard_normal(rng) as f32)
-            .collect();
-        let noise = Tensor::from_vec(draws, (k, self.action_size), &Device::Cpu)?;
+        let noise = normal_draws(raw_obs.len() / self.obs_size, self.action_size, rng)?;
         let (action, _) = sample(&mean, &log_std, &noise)?;
         Ok(action.flatten_all()?.to_vec1()?)
     }

@@ -4,9 +4,11 @@
 //!
 //! ```toml
 //! [algo]
-//! name = "ppo"            # the paper's learner; or "sac" (soft actor-critic)
+//! name = "ppo"            # the paper's learner; or "sac" (soft actor-critic),
+//!                         # or "crossq" (SAC with CrossQ's critics and settings)
 //!
-//! [sac]                   # learn::sac::SacConfig, used when algo.name = "sac"
+//! [sac]                   # learn::sac::SacConfig, used when algo.name = "sac" or
+//!                         # "crossq"; its defaults are SacConfig::crossq() for "crossq"
 //! updates_per_step = 1.0  # gradient steps per transition collected
 //! buffer_size = 200000
 //!
@@ -115,6 +117,9 @@ pub struct Experiment {
     pub ppo: PpoConfig,
     /// SAC settings
     pub sac: SacConfig,
+    /// the file's `[sac]` table, kept so that a learner named on the
+    /// command line gets its own defaults under the file's values
+    pub sac_table: SacTable,
     /// the training run's settings
     pub train: TrainSettings,
     /// curriculum stages, in order (empty: the terrain for all iterations)
@@ -181,6 +186,41 @@ impl TrainSettings {
     }
 }
 
+/// The `[sac]` table as written. It takes no part in comparisons: two
+/// experiments are equal when their resolved settings (`Experiment::sac`)
+/// are, however the file spelled them.
+#[derive(Debug, Clone, Default)]
+pub struct SacTable(pub Option<toml::Table>);
+
+impl PartialEq for SacTable {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+/// The SAC settings for `algo`: its defaults ([`Algo::sac_defaults`]) with
+/// the `[sac]` table's values on top. `crossq` with `variant = "sac"` is a
+/// contradiction and an error.
+fn sac_settings(algo: Algo, table: Option<&toml::Table>) -> Result<SacConfig> {
+    let mut merged = match toml::Value::try_from(algo.sac_defaults())? {
+        toml::Value::Table(t) => t,
+        _ => unreachable!("SacConfig serialises to a table"),
+    };
+    if let Some(table) = table {
+        for (key, value) in table {
+            merged.insert(key.clone(), value.clone());
+        }
+    }
+    let sac: SacConfig = toml::Value::Table(merged)
+        .try_into()
+        .map_err(|e: toml::de::Error| anyhow!("{}", e.message()))?;
+    if algo == Algo::CrossQ && sac.variant != learn::sac::SacVariant::CrossQ {
+        bail!("variant = \"sac\" contradicts algo.name = \"crossq\"");
+    }
+    sac.validate()?;
+    Ok(sac)
+}
+
 /// `[algo]`: which learner trains.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -239,15 +279,11 @@ impl Experiment {
         };
         ppo.validate()
             .map_err(|e| anyhow!("config {source} [ppo]: {e}"))?;
-        let sac: SacConfig = match doc.get("sac") {
-            None => SacConfig::default(),
-            Some(value) => value
-                .clone()
-                .try_into()
-                .map_err(|e: toml::de::Error| anyhow!("config {source} [sac]: {}", e.message()))?,
+        let sac_table = match doc.get("sac") {
+            None => None,
+            Some(toml::Value::Table(table)) => Some(table.clone()),
+            Some(_) => bail!("config {source} [sac]: must be a table"),
         };
-        sac.validate()
-            .map_err(|e| anyhow!("config {source} [sac]: {e}"))?;
         let algo = match doc.get("algo") {
             None => Algo::default(),
             Some(value) => {
@@ -257,7 +293,7 @@ impl Experiment {
                     })?;
                 Algo::from_name(&section.name).ok_or_else(|| {
                     anyhow!(
-                        "config {source} [algo]: name = {:?}: must be \"ppo\" or \"sac\"",
+                        "config {source} [algo]: name = {:?}: must be \"ppo\", \"sac\" or \"crossq\"",
                         section.name
                     )
                 })?
@@ -296,6 +332,8 @@ impl Experiment {
                     .map_err(|e| anyhow!("config {source} [physics]: {e}"))?
             }
         };
+        let sac = sac_settings(algo, sac_table.as_ref())
+            .map_err(|e| anyhow!("config {source} [sac]: {e}"))?;
         Ok(Self {
             terrain,
             task,
@@ -303,9 +341,19 @@ impl Experiment {
             algo,
             ppo,
             sac,
+            sac_table: SacTable(sac_table),
             train,
             curriculum,
         })
+    }
+
+    /// Switches the learner (`--algo`): the SAC settings become the
+    /// algorithm's defaults under the file's `[sac]` values.
+    pub fn set_algo(&mut self, algo: Algo) -> Result<()> {
+        self.sac = sac_settings(algo, self.sac_table.0.as_ref())
+            .map_err(|e| anyhow!("--algo {}: [sac]: {e}", algo.name()))?;
+        self.algo = algo;
+        Ok(())
     }
 
     /// The experiment for a terrain spec with every other setting at its
@@ -318,6 +366,7 @@ impl Experiment {
             algo: Algo::default(),
             ppo: PpoConfig::default(),
             sac: SacConfig::default(),
+            sac_table: SacTable::default(),
             train: TrainSettings::default(),
             curriculum: Vec::new(),
         }
@@ -715,6 +764,45 @@ mod tests {
         assert_eq!(
             Experiment::from_toml(&f.to_toml(), "round trip").unwrap(),
             f
+        );
+        // --algo crossq: CrossQ's defaults under the file's [sac] values
+        let mut g = f.clone();
+        g.set_algo(learn::Algo::CrossQ).unwrap();
+        assert_eq!(g.sac.variant, learn::sac::SacVariant::CrossQ);
+        assert_eq!(g.sac.policy_delay, 3);
+        assert_eq!(g.sac.updates_per_step, 2.0);
+        assert_eq!(
+            Experiment::from_toml(&g.to_toml(), "round trip")
+                .unwrap()
+                .sac,
+            g.sac
+        );
+        let crossq = Experiment::from_toml(
+            "[terrain]\nspec = \"rigid\"\n[algo]\nname = \"crossq\"\n[sac]\nlearning_rate = 3e-4\n",
+            "t.toml",
+        )
+        .unwrap();
+        assert_eq!(crossq.sac.learning_rate, 3e-4);
+        assert_eq!(crossq.sac.adam_beta1, 0.5);
+        let err = Experiment::from_toml(
+            "[terrain]\nspec = \"rigid\"\n[algo]\nname = \"crossq\"\n[sac]\nvariant = \"sac\"\n",
+            "t.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("[sac]") && err.contains("contradicts"),
+            "{err}"
+        );
+        let err = Experiment::from_toml(
+            "[terrain]\nspec = \"rigid\"\n[sac]\npolicy_delay = 0\n",
+            "t.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("t.toml [sac]") && err.contains("policy_delay"),
+            "{err}"
         );
         assert_eq!(
             Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "t.toml")

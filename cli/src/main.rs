@@ -17,6 +17,7 @@ mod bench;
 mod commands;
 mod config;
 mod eval;
+mod export;
 mod policy;
 mod rollout;
 mod task_env;
@@ -49,10 +50,12 @@ enum Command {
     Play(rollout::PlayArgs),
     /// Evaluate a policy on many episodes of unseen seeds: success, distance, falls, the paper's Table I and Fig. 4, PNG figures.
     Eval(Box<eval::EvalArgs>),
-    /// Train a policy with PPO on parallel worlds (checkpoints, --resume, Rerun)
+    /// Train a policy with PPO, SAC or CrossQ on parallel worlds (checkpoints, --resume, Rerun)
     Train(train::TrainArgs),
     /// Measure physics steps per second of the robot standing, one world per thread.
     Bench(bench::BenchArgs),
+    /// Write a trained policy for use or shipping: actor, normaliser, config and metrics, without optimiser state.
+    Export(export::ExportArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -91,6 +94,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => eval::eval(&args),
         Command::Train(args) => train::train(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Export(args) => export::export(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -13,7 +13,7 @@ use robot::task::{ActionPrior, Task, TaskConfig};
 pub enum Policy {
     /// the scripted crawl
     Scripted(ScriptedCrawl),
-    /// a trained checkpoint (PPO or SAC), mean action
+    /// a trained checkpoint or exported policy (PPO or SAC), mean action
     Trained {
         learner: Box<learn::Learner>,
         /// the task settings the policy was trained with (its observation
@@ -27,7 +27,8 @@ pub enum Policy {
 }
 
 impl Policy {
-    /// `scripted`, or a checkpoint path; `sample_seed` makes a trained
+    /// `scripted`, or the path of a checkpoint, a run directory or an
+    /// exported policy (`quadwalk export`); `sample_seed` makes a trained
     /// policy sample its actions.
     pub fn from_arg(arg: &str, sample_seed: Option<u64>) -> Result<Self> {
         if arg == "scripted" {
@@ -44,9 +45,13 @@ impl Policy {
                 "policy {arg:?} is neither `scripted` nor an existing checkpoint or run directory"
             );
         }
-        let dir =
-            learn::checkpoint::resolve_checkpoint(path).with_context(|| format!("policy {arg}"))?;
-        let learner = learn::Learner::load(&dir).with_context(|| format!("policy {arg}"))?;
+        let dir = if learn::export::is_exported_policy(path) {
+            path.to_path_buf()
+        } else {
+            learn::checkpoint::resolve_checkpoint(path).with_context(|| format!("policy {arg}"))?
+        };
+        let learner =
+            learn::Learner::load_for_acting(&dir).with_context(|| format!("policy {arg}"))?;
         let config = crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE))
             .with_context(|| format!("policy {arg}"))?;
         let (task, physics) = (config.task, config.physics);

@@ -33,7 +33,8 @@ struct RunFlags {
 #[derive(Debug, Args)]
 pub struct RolloutArgs {
     /// Policy: `scripted` (the documented crawl) or a trained checkpoint
-    /// (a run directory or one of its checkpoints; deterministic mean action)
+    /// (a run directory, one of its checkpoints, or an exported policy;
+    /// deterministic mean action)
     #[arg(long, default_value = "scripted")]
     policy: String,
     #[command(flatten)]
@@ -51,7 +52,8 @@ pub struct RolloutArgs {
 #[derive(Debug, Args)]
 pub struct PlayArgs {
     /// Policy: `scripted` (the documented crawl) or a trained checkpoint
-    /// (a run directory or one of its checkpoints; deterministic mean action)
+    /// (a run directory, one of its checkpoints, or an exported policy;
+    /// deterministic mean action)
     #[arg(long, default_value = "scripted", conflicts_with = "checkpoint")]
     policy: String,
     /// A trained checkpoint to play (the same as --policy DIR)

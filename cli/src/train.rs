@@ -45,7 +45,7 @@ pub const METRICS_FILE: &str = "metrics.jsonl";
 pub struct TrainArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Learner: ppo (the paper's) or sac [default: ppo, or the config's algo.name]
+    /// Learner: ppo (the paper's), sac, or crossq (SAC with CrossQ's critics) [default: ppo, or the config's algo.name]
     #[arg(long, value_parser = parse_algo, conflicts_with = "resume")]
     algo: Option<Algo>,
     /// Parallel environments [default: 16, or the config's train.envs]
@@ -81,7 +81,8 @@ pub struct TrainArgs {
 
 /// Parses `--algo`.
 fn parse_algo(text: &str) -> Result<Algo, String> {
-    Algo::from_name(text).ok_or_else(|| format!("{text:?} is not a learner: use ppo or sac"))
+    Algo::from_name(text)
+        .ok_or_else(|| format!("{text:?} is not a learner: use ppo, sac or crossq"))
 }
 
 /// Everything a run needs, resolved from flags, config file or checkpoint.
@@ -150,6 +151,10 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
                 "--resume continues the run with its own config.toml; --terrain and --config cannot be given with it"
             );
         }
+        if learn::export::is_exported_policy(resume) {
+            // Learner::load's refusal, before the search for a state file
+            Learner::load(resume).with_context(|| format!("--resume {}", resume.display()))?;
+        }
         let checkpoint =
             resolve_checkpoint(resume).with_context(|| format!("--resume {}", resume.display()))?;
         let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
@@ -197,7 +202,7 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
         experiment.train.seed = seed;
     }
     if let Some(algo) = args.algo {
-        experiment.algo = algo;
+        experiment.set_algo(algo)?;
     }
     apply_common(&mut experiment, args)?;
     let run_dir = args
@@ -230,7 +235,7 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
             actions,
             seed,
         )?)),
-        Algo::Sac => Learner::Sac(Box::new(SacAgent::new(
+        Algo::Sac | Algo::CrossQ => Learner::Sac(Box::new(SacAgent::new(
             experiment.sac.clone(),
             obs,
             actions,

@@ -19,6 +19,9 @@ pub enum Algo {
     Ppo,
     /// soft actor-critic
     Sac,
+    /// soft actor-critic with CrossQ's critics and settings
+    /// ([`crate::sac::SacConfig::crossq`])
+    CrossQ,
 }
 
 impl Algo {
@@ -27,6 +30,16 @@ impl Algo {
         match self {
             Self::Ppo => "ppo",
             Self::Sac => "sac",
+            Self::CrossQ => "crossq",
+        }
+    }
+
+    /// The SAC settings an experiment starts from when it names this
+    /// algorithm (PPO: SAC's defaults, unused).
+    pub fn sac_defaults(self) -> crate::sac::SacConfig {
+        match self {
+            Self::CrossQ => crate::sac::SacConfig::crossq(),
+            Self::Ppo | Self::Sac => crate::sac::SacConfig::default(),
         }
     }
 
@@ -35,6 +48,7 @@ impl Algo {
         match name {
             "ppo" => Some(Self::Ppo),
             "sac" => Some(Self::Sac),
+            "crossq" => Some(Self::CrossQ),
             _ => None,
         }
     }
@@ -59,7 +73,14 @@ pub enum LearnerStats {
 
 impl Learner {
     /// Loads a checkpoint of either algorithm (told apart by its state file).
+    /// An exported policy ([`crate::export`]) is refused: it cannot resume.
     pub fn load(dir: &Path) -> Result<Self, LearnError> {
+        if crate::export::is_exported_policy(dir) {
+            return Err(LearnError::Checkpoint(format!(
+                "{}: an exported policy (no critics, optimiser state or replay buffer): it can act but training cannot resume from it; resume from the run's checkpoint",
+                dir.display()
+            )));
+        }
         if is_sac_checkpoint(dir) {
             Ok(Self::Sac(Box::new(SacAgent::load(dir)?)))
         } else {
@@ -71,7 +92,10 @@ impl Learner {
     pub fn algo(&self) -> Algo {
         match self {
             Self::Ppo(_) => Algo::Ppo,
-            Self::Sac(_) => Algo::Sac,
+            Self::Sac(a) => match a.config.variant {
+                crate::sac::SacVariant::Sac => Algo::Sac,
+                crate::sac::SacVariant::CrossQ => Algo::CrossQ,
+            },
         }
     }
 

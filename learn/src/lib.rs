@@ -17,6 +17,7 @@
 //! | [`learner`] | either algorithm behind one type (train, checkpoint, act) |
 //! | [`trainer`] | collect, update, statistics; seeds |
 //! | [`checkpoint`] | atomic, checksummed checkpoints |
+//! | [`export`] | policies for use: the actor and normaliser of a checkpoint |
 //! | [`sac`] | soft actor-critic: squashed Gaussian, twin critics, temperature, replay buffer |
 //! | [`toy`] | a point-mass `VecEnv` that PPO must solve (tests, examples) |
 
@@ -24,6 +25,7 @@ pub mod buffer;
 pub mod checkpoint;
 pub mod config;
 pub mod env;
+pub mod export;
 pub mod gae;
 pub mod learner;
 pub mod normalizer;

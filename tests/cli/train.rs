@@ -299,6 +299,117 @@ fn sac_trains_resumes_bit_for_bit_and_its_policy_runs() {
     assert!(err.contains("td3") && err.contains("[algo]"), "{err}");
 }
 
+/// `--algo crossq` trains SAC with CrossQ's critics (its checkpoint says
+/// so and resumes bit for bit), and `export` writes a small policy that
+/// rolls out as its checkpoint does and cannot be resumed.
+#[test]
+fn crossq_trains_and_exported_policies_act_as_their_checkpoints() {
+    let dir = scratch_dir("crossq");
+    let config = dir.join("sac.toml");
+    std::fs::write(&config, format!("{TINY}{TINY_SAC}")).unwrap();
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let train = |run: &Path, iterations: &str| {
+        ok(&[
+            "train",
+            "--config",
+            s(&config),
+            "--algo",
+            "crossq",
+            "--run-dir",
+            s(run),
+            "--iterations",
+            iterations,
+            "--threads",
+            "2",
+            "--rerun",
+            "off",
+        ])
+    };
+    let progress = train(&a, "3");
+    assert!(progress.contains("training (crossq)"), "{progress}");
+    train(&b, "2");
+    resume_on_two_threads(&b, "3");
+    assert_eq!(weights(&a), weights(&b), "a resumed CrossQ run differs");
+    let config_text = std::fs::read_to_string(a.join("config.toml")).unwrap();
+    assert!(
+        config_text.contains("name = \"crossq\"") && config_text.contains("variant = \"crossq\""),
+        "{config_text}"
+    );
+    // the file's [sac] values stay (hidden_sizes = [16]), CrossQ's defaults fill the rest
+    assert!(config_text.contains("policy_delay = 3"), "{config_text}");
+
+    for (run, name) in [(&a, "crossq"), (&dir.join("ppo"), "ppo")] {
+        if name == "ppo" {
+            train_tiny(&tiny_config(&dir), run, "2");
+        }
+        let out = dir.join(format!("{name}-policy"));
+        let said = String::from_utf8(
+            quadwalk(&["export", "--checkpoint", s(run), "--out", s(&out)]).stdout,
+        )
+        .unwrap();
+        assert!(said.contains("exported"), "{said}");
+        for file in [
+            "policy.safetensors",
+            "policy.toml",
+            "config.toml",
+            "metrics.jsonl",
+        ] {
+            assert!(out.join(file).is_file(), "{name}: {file} missing");
+        }
+        assert!(!out.join("weights.safetensors").exists());
+        let roll = |policy: &Path, stochastic: bool| {
+            let mut args = vec![
+                "rollout",
+                "--policy",
+                s(policy),
+                "--terrain",
+                "rigid",
+                "--phases",
+                "3",
+                "--seed",
+                "5",
+                "--json",
+            ];
+            if stochastic {
+                args.push("--stochastic");
+            }
+            let mut v = json_of(&args);
+            v.as_object_mut().unwrap().remove("policy");
+            v
+        };
+        assert_eq!(roll(run, false), roll(&out, false), "{name}: mean action");
+        assert_eq!(roll(run, true), roll(&out, true), "{name}: sampled");
+        let p = json_of(&[
+            "play",
+            "--checkpoint",
+            s(&out),
+            "--terrain",
+            "rigid",
+            "--phases",
+            "1",
+            "--rerun",
+            "off",
+            "--json",
+        ]);
+        assert!(p["phases"].as_u64().unwrap() >= 1, "{p}");
+        let err = failure(&["train", "--resume", s(&out), "--rerun", "off"], 1);
+        assert!(err.contains("exported policy"), "{err}");
+        let err = failure(&["export", "--checkpoint", s(run), "--out", s(&out)], 1);
+        assert!(err.contains("already exists"), "{err}");
+    }
+    let err = failure(
+        &[
+            "export",
+            "--checkpoint",
+            s(&dir.join("nothing")),
+            "--out",
+            s(&dir.join("x")),
+        ],
+        1,
+    );
+    assert!(err.contains("nothing"), "{err}");
+}
+
 #[test]
 fn trained_checkpoints_play_and_roll_out() {
     let dir = scratch_dir("play");

@@ -46,7 +46,8 @@ const REPORT_FORMAT: &str = "quadwalk-eval/1";
 #[derive(Debug, Args)]
 pub struct EvalArgs {
     /// Policy: `scripted` (the documented crawl) or a trained checkpoint
-    /// (a run directory or one of its checkpoints; deterministic mean action)
+    /// (a run directory, one of its checkpoints, or an exported policy;
+    /// deterministic mean action)
     #[arg(long, default_value = "scripted")]
     policy: String,
     #[command(flatten)]
@@ -172,6 +173,14 @@ fn default_out_dir(policy: &str, spec: &str, seed: u64) -> PathBuf {
         return Path::new("runs").join(format!("eval-scripted-{}-seed{seed}", slug(spec)));
     }
     let path = Path::new(policy);
+    // An exported policy (shipped, perhaps read-only) is not written into.
+    if learn::export::is_exported_policy(path) {
+        let stem = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("policy");
+        return Path::new("runs").join(format!("eval-{stem}-{}-seed{seed}", slug(spec)));
+    }
     // A run directory holds `latest`; a checkpoint lives inside its run.
     let run = if path.join(learn::checkpoint::LATEST_LINK).exists() {
         path

@@ -1,9 +1,10 @@
 //! The SAC agent over a [`VecEnv`]: collect with the squashed Gaussian
 //! (uniform random actions for the first `learning_starts` transitions),
 //! store in the replay buffer, and take `updates_per_step` gradient steps per
-//! transition: critics on the soft Bellman target from the Polyak-averaged
-//! target critics, the actor through the reparameterised sample, the
-//! temperature toward the target entropy.
+//! transition: critics on the soft Bellman target (from the Polyak-averaged
+//! target critics, or CrossQ's joint pass, [`super::critics`]), and every
+//! `policy_delay`-th step the actor through the reparameterised sample and
+//! the temperature toward the target entropy.
 //!
 //! Observations are normalised with running statistics updated on the
 //! collected observations; the buffer keeps them raw and each batch is
@@ -15,7 +16,9 @@ use candle_core::{Device, Tensor, Var};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::config::SacConfig;
+use super::batch_renorm::Mode;
+use super::config::{SacConfig, SacVariant};
+use super::critics::Critics;
 use super::losses::{actor_loss, critic_loss, soft_target, temperature_loss};
 use super::replay::{Batch, ReplayBuffer};
 use super::squashed::{bounded_log_std, sample};
@@ -54,11 +57,11 @@ pub struct SacStats {
     pub updates: usize,
     /// critic loss, mean over the updates
     pub critic_loss: Option<f64>,
-    /// actor loss, mean over the updates
+    /// actor loss, mean over the actor's updates
     pub actor_loss: Option<f64>,
     /// the temperature after the iteration
     pub alpha: f64,
-    /// -mean log pi of the actor's samples in the updates (its entropy estimate)
+    /// -mean log pi of the actor's samples in its updates (its entropy estimate)
     pub entropy: Option<f64>,
     /// seconds stepping the environments
     pub env_secs: f64,
@@ -74,10 +77,9 @@ pub struct SacAgent {
     pub config: SacConfig,
     /// observation -> (mean, raw log-std), `2 A` outputs
     pub actor: Mlp,
-    /// the two critics, (observation, action) -> Q
-    pub critics: [Mlp; 2],
-    /// their Polyak-averaged copies
-    pub target_critics: [Mlp; 2],
+    /// the two critics, (observation, action) -> Q, with their targets or
+    /// CrossQ's normalisation
+    pub critics: Critics,
     /// log of the temperature, one value
     pub log_alpha: Var,
     /// optimiser of the actor
@@ -113,32 +115,6 @@ fn normal_draws(rows: usize, cols: usize, rng: &mut ChaCha8Rng) -> Result<Tensor
     Ok(Tensor::from_vec(draws, (rows, cols), &Device::Cpu)?)
 }
 
-/// A deep copy of `mlp` (a `Var`'s clone shares its storage).
-fn deep_copy(mlp: &Mlp) -> Result<Mlp, LearnError> {
-    let mut copy = mlp.clone();
-    for layer in &mut copy.layers {
-        layer.weight = Var::from_tensor(&layer.weight.as_tensor().copy()?)?;
-        layer.bias = Var::from_tensor(&layer.bias.as_tensor().copy()?)?;
-    }
-    Ok(copy)
-}
-
-/// `target <- (1 - tau) target + tau source`, var by var.
-fn polyak(target: &Mlp, source: &Mlp, tau: f64) -> Result<(), LearnError> {
-    for (t, s) in target
-        .named_vars("t")
-        .iter()
-        .zip(source.named_vars("s").iter())
-    {
-        let mixed =
-            t.1.as_tensor()
-                .affine(1.0 - tau, 0.0)?
-                .add(&s.1.as_tensor().affine(tau, 0.0)?)?;
-        t.1.set(&mixed.detach())?;
-    }
-    Ok(())
-}
-
 impl SacAgent {
     /// Fresh networks for `obs_size` observations and `action_size` actions.
     pub fn new(
@@ -162,28 +138,29 @@ impl SacAgent {
                 .collect::<Vec<_>>()
         };
         let actor = Mlp::new(&widths(obs_size, 2 * action_size), 0.01, &mut rng, &device)?;
-        let critic_widths = widths(obs_size + action_size, 1);
-        let critics = [
-            Mlp::new(&critic_widths, 1.0, &mut rng, &device)?,
-            Mlp::new(&critic_widths, 1.0, &mut rng, &device)?,
-        ];
-        let target_critics = [deep_copy(&critics[0])?, deep_copy(&critics[1])?];
+        let critic_widths: Vec<usize> = std::iter::once(obs_size + action_size)
+            .chain(config.critic_widths().iter().copied())
+            .chain(std::iter::once(1))
+            .collect();
+        let critics = match config.variant {
+            SacVariant::Sac => Critics::targeted(&critic_widths, &mut rng, &device)?,
+            SacVariant::CrossQ => Critics::crossq(&critic_widths, &mut rng, &device)?,
+        };
         let log_alpha = Var::from_tensor(&Tensor::new(&[config.init_alpha.ln() as f32], &device)?)?;
-        let actor_adam = Adam::new(actor.named_vars("actor"), config.learning_rate)?;
-        let mut critic_vars = critics[0].named_vars("q1");
-        critic_vars.extend(critics[1].named_vars("q2"));
-        let critic_adam = Adam::new(critic_vars, config.learning_rate)?;
-        let alpha_adam = Adam::new(
-            vec![("log_alpha".to_string(), log_alpha.clone())],
-            config.learning_rate,
-        )?;
+        let adam = |vars: Vec<(String, Var)>| -> Result<Adam, LearnError> {
+            let mut adam = Adam::new(vars, config.learning_rate)?;
+            adam.betas.0 = config.adam_beta1;
+            Ok(adam)
+        };
+        let actor_adam = adam(actor.named_vars("actor"))?;
+        let critic_adam = adam(critics.trainable_vars())?;
+        let alpha_adam = adam(vec![("log_alpha".to_string(), log_alpha.clone())])?;
         Ok(Self {
             normalizer: ObsNormalizer::new(obs_size, config.obs_clip),
             buffer: ReplayBuffer::new(obs_size, action_size, config.buffer_size),
             config,
             actor,
             critics,
-            target_critics,
             log_alpha,
             actor_adam,
             critic_adam,
@@ -265,22 +242,11 @@ impl SacAgent {
         Ok(action.flatten_all()?.to_vec1()?)
     }
 
-    /// Q1 and Q2 of (observation, action) pairs, `B` each.
-    fn q_values(
-        critics: &[Mlp; 2],
-        obs: &Tensor,
-        actions: &Tensor,
-    ) -> candle_core::Result<[Tensor; 2]> {
-        let x = Tensor::cat(&[obs, actions], 1)?;
-        Ok([
-            critics[0].forward(&x)?.flatten_all()?,
-            critics[1].forward(&x)?.flatten_all()?,
-        ])
-    }
-
-    /// One gradient step on a batch: critics, actor, temperature, targets.
-    /// Returns (critic loss, actor loss, -mean log pi).
-    pub fn update(&mut self, batch: &Batch) -> Result<(f64, f64, f64), LearnError> {
+    /// One gradient step on a batch: the critics; the actor and the
+    /// temperature on every `policy_delay`-th step; the targets (targeted
+    /// critics). Returns the critic loss and, on an actor step, (actor
+    /// loss, -mean log pi).
+    pub fn update(&mut self, batch: &Batch) -> Result<(f64, Option<(f64, f64)>), LearnError> {
         let device = Device::Cpu;
         let b = batch.rewards.len();
         let (o, a) = (self.obs_size, self.action_size);
@@ -296,7 +262,13 @@ impl SacAgent {
         let (next_mean, next_log_std) = self.heads(&next_obs)?;
         let next_noise = self.noise(b)?;
         let (next_actions, next_log_pi) = sample(&next_mean, &next_log_std, &next_noise)?;
-        let [t1, t2] = Self::q_values(&self.target_critics, &next_obs, &next_actions.detach())?;
+        let now = Tensor::cat(&[&obs, &actions], 1)?;
+        let next = Tensor::cat(&[&next_obs, &next_actions.detach()], 1)?;
+        let mode = Mode::Train {
+            momentum: self.config.batch_renorm_momentum,
+            renorm: self.total_updates >= self.config.renorm_warmup_updates,
+        };
+        let ([q1, q2], [t1, t2]) = self.critics.bellman_pair(&now, &next, mode)?;
         let target = soft_target(
             &rewards,
             &terminated,
@@ -306,18 +278,34 @@ impl SacAgent {
             alpha,
             self.config.gamma,
         )?;
-        let [q1, q2] = Self::q_values(&self.critics, &obs, &actions)?;
         let loss_q = critic_loss(&q1, &q2, &target)?;
         let grads = loss_q.backward()?;
         let mut g = gradients(&grads, self.critic_adam.vars())?;
         clip_grad_norm(&mut g, self.config.max_grad_norm)?;
         self.critic_adam.apply(&g)?;
+        let critic = f64::from(loss_q.to_scalar::<f32>()?);
+        let actor_step = self
+            .total_updates
+            .is_multiple_of(self.config.policy_delay as u64);
+        self.total_updates += 1;
+        let actor = if actor_step {
+            Some(self.update_actor(&obs, alpha)?)
+        } else {
+            None
+        };
+        self.critics.soft_update(self.config.tau)?;
+        Ok((critic, actor))
+    }
 
+    /// The actor's and the temperature's step on normalised observations
+    /// `obs`; returns (actor loss, -mean log pi).
+    fn update_actor(&mut self, obs: &Tensor, alpha: f64) -> Result<(f64, f64), LearnError> {
         // Actor: mean(alpha log pi(a~ | s) - min Q(s, a~))
-        let (mean, log_std) = self.heads(&obs)?;
+        let b = obs.dim(0)?;
+        let (mean, log_std) = self.heads(obs)?;
         let noise = self.noise(b)?;
         let (sampled, log_pi) = sample(&mean, &log_std, &noise)?;
-        let [p1, p2] = Self::q_values(&self.critics, &obs, &sampled)?;
+        let [p1, p2] = self.critics.q_values(&Tensor::cat(&[obs, &sampled], 1)?)?;
         let loss_pi = actor_loss(&log_pi, &p1, &p2, alpha)?;
         let grads = loss_pi.backward()?;
         let mut g = gradients(&grads, self.actor_adam.vars())?;
@@ -330,15 +318,8 @@ impl SacAgent {
         let grads = loss_alpha.backward()?;
         let g = gradients(&grads, self.alpha_adam.vars())?;
         self.alpha_adam.apply(&g)?;
-
-        for (target, critic) in self.target_critics.iter().zip(&self.critics) {
-            polyak(target, critic, self.config.tau)?;
-        }
-        self.total_updates += 1;
-        let scalar =
-            |t: &Tensor| -> Result<f64, LearnError> { Ok(f64::from(t.to_scalar::<f32>()?)) };
         let entropy = -f64::from(log_pi.mean_all()?.to_scalar::<f32>()?);
-        Ok((scalar(&loss_q)?, scalar(&loss_pi)?, entropy))
+        Ok((f64::from(loss_pi.to_scalar::<f32>()?), entropy))
     }
 
     /// Collects `steps_per_env` steps of every environment, updating as it
@@ -372,6 +353,7 @@ impl SacAgent {
         let (mut terminated_count, mut reward_sum) = (0usize, 0.0f64);
         let (mut env_secs, mut update_secs) = (0.0f64, 0.0f64);
         let (mut loss_sums, mut updates) = ((0.0f64, 0.0f64, 0.0f64), 0usize);
+        let mut actor_updates = 0usize;
         for _ in 0..self.config.steps_per_env {
             if env.interrupted() {
                 break; // the caller discards this iteration
@@ -429,8 +411,13 @@ impl SacAgent {
                 let t = Instant::now();
                 while self.update_debt >= 1.0 {
                     let batch = self.buffer.sample(self.config.batch_size, &mut self.rng);
-                    let (q, pi, h) = self.update(&batch)?;
-                    loss_sums = (loss_sums.0 + q, loss_sums.1 + pi, loss_sums.2 + h);
+                    let (q, actor) = self.update(&batch)?;
+                    loss_sums.0 += q;
+                    if let Some((pi, h)) = actor {
+                        loss_sums.1 += pi;
+                        loss_sums.2 += h;
+                        actor_updates += 1;
+                    }
                     updates += 1;
                     self.update_debt -= 1.0;
                 }
@@ -440,6 +427,7 @@ impl SacAgent {
         self.iteration += 1;
         let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
         let per_update = |s: f64| (updates > 0).then(|| s / updates as f64);
+        let per_actor_update = |s: f64| (actor_updates > 0).then(|| s / actor_updates as f64);
         let steps = n * self.config.steps_per_env;
         Ok(SacStats {
             iteration: self.iteration,
@@ -462,9 +450,9 @@ impl SacAgent {
                 .collect(),
             updates,
             critic_loss: per_update(loss_sums.0),
-            actor_loss: per_update(loss_sums.1),
+            actor_loss: per_actor_update(loss_sums.1),
             alpha: self.alpha()?,
-            entropy: per_update(loss_sums.2),
+            entropy: per_actor_update(loss_sums.2),
             env_secs,
             update_secs,
             steps_per_sec: steps as f64 / started.elapsed().as_secs_f64().max(1e-9),
@@ -553,6 +541,44 @@ mod tests {
         );
     }
 
+    /// CrossQ (no targets, batch renormalisation, the actor every third
+    /// step) passes the same bar.
+    #[test]
+    fn crossq_learns_the_point_mass_in_a_quarter_of_ppos_samples() {
+        let mut env = PointMass::new(16, 25);
+        let config = SacConfig {
+            critic_hidden_sizes: Some(vec![128, 128]),
+            renorm_warmup_updates: 1_000,
+            ..SacConfig {
+                variant: SacVariant::CrossQ,
+                policy_delay: 3,
+                adam_beta1: 0.5,
+                ..toy_config()
+            }
+        };
+        let mut agent = SacAgent::new(config, 4, 2, 5).unwrap();
+        let mut history = Vec::new();
+        let mut reached = None;
+        while agent.total_steps < 8_000 {
+            let stats = agent.iterate(&mut env).unwrap();
+            let r = stats.mean_episode_return.unwrap();
+            history.push(r);
+            if stats.total_steps > 800 && r > -10.0 {
+                reached = Some(stats.total_steps);
+                break;
+            }
+        }
+        assert!(
+            reached.is_some(),
+            "CrossQ did not pass -10 in 8,000 steps: returns {history:?}"
+        );
+        // the actor and the temperature took a step on every third update
+        let critic_steps = agent.critic_adam.step;
+        assert_eq!(agent.actor_adam.step, critic_steps.div_ceil(3));
+        assert_eq!(agent.alpha_adam.step, critic_steps.div_ceil(3));
+        assert!((agent.critic_adam.betas.0 - 0.5).abs() < 1e-12);
+    }
+
     #[test]
     fn the_targets_trail_the_critics_and_no_state_holds_a_graph() {
         let mut env = PointMass::new(4, 10);
@@ -570,9 +596,16 @@ mod tests {
             1,
         )
         .unwrap();
+        let first_weights = |agent: &SacAgent| match &agent.critics {
+            Critics::Targeted { online, target } => (
+                online[0].layers[0].weight.as_tensor().clone(),
+                target[0].layers[0].weight.as_tensor().clone(),
+            ),
+            Critics::CrossQ { .. } => unreachable!("targeted critics"),
+        };
         // before any update the targets equal the critics but are separate vars
-        let c = agent.critics[0].layers[0].weight.as_tensor();
-        let t = agent.target_critics[0].layers[0].weight.as_tensor();
+        let (c, t) = first_weights(&agent);
+        let (c, t) = (&c, &t);
         assert_ne!(c.id(), t.id());
         let diff = |x: &Tensor, y: &Tensor| -> f32 {
             x.sub(y)
@@ -588,14 +621,14 @@ mod tests {
         let before = t.copy().unwrap();
         agent.iterate(&mut env).unwrap();
         assert!(agent.total_updates > 0);
-        let c = agent.critics[0].layers[0].weight.as_tensor();
-        let t = agent.target_critics[0].layers[0].weight.as_tensor();
+        let (c, t) = first_weights(&agent);
+        let (c, t) = (&c, &t);
         assert!(diff(t, &before) > 0.0, "the target did not move");
         assert!(diff(c, t) > 0.0, "the target jumped to the critic");
         for adam in [&agent.actor_adam, &agent.critic_adam, &agent.alpha_adam] {
             assert!(adam.m.iter().chain(&adam.v).all(|m| !m.track_op()));
         }
-        for (name, v) in agent.target_critics[0].named_vars("t") {
+        for (name, v) in agent.critics.named_vars() {
             assert!(v.as_tensor().is_variable(), "{name} is no longer a var");
         }
     }

@@ -3,7 +3,7 @@
 //!
 //! | file | content |
 //! | --- | --- |
-//! | `weights.safetensors` | `actor.*`, `q1.*`, `q2.*`, `q1_target.*`, `q2_target.*`, `log_alpha`, the normaliser (`obs_norm.mean`, `obs_norm.var`, f64) and the three optimisers' moments (`adam_actor.*`, `adam_critic.*`, `adam_alpha.*`) |
+//! | `weights.safetensors` | `actor.*`, `q1.*`, `q2.*`, then `q1_target.*`, `q2_target.*` (SAC) or each critic's normalisation's running statistics (`q1.norm<k>.running_mean`, CrossQ), `log_alpha`, the normaliser (`obs_norm.mean`, `obs_norm.var`, f64) and the three optimisers' moments (`adam_actor.*`, `adam_critic.*`, `adam_alpha.*`) |
 //! | `replay.safetensors` | the replay buffer's stored transitions in storage order (`replay.obs`, `replay.actions`, `replay.rewards`, `replay.next_obs`, `replay.terminated`) |
 //! | `state.toml` | format, `algo = "sac"`, iteration, seed, sizes, step and update counters, the update debt, Adam steps, normaliser count, the sampling RNG's position, the ring position, the SAC settings, and both files' FNV-1a 64 checksums |
 //!
@@ -61,10 +61,7 @@ impl SacAgent {
     /// Every var of the networks, named as in the weights file.
     pub fn named_vars(&self) -> Vec<(String, candle_core::Var)> {
         let mut vars = self.actor.named_vars("actor");
-        vars.extend(self.critics[0].named_vars("q1"));
-        vars.extend(self.critics[1].named_vars("q2"));
-        vars.extend(self.target_critics[0].named_vars("q1_target"));
-        vars.extend(self.target_critics[1].named_vars("q2_target"));
+        vars.extend(self.critics.named_vars());
         vars.push(("log_alpha".to_string(), self.log_alpha.clone()));
         vars
     }
@@ -235,15 +232,14 @@ mod tests {
         }
     }
 
-    #[test]
-    fn resuming_from_a_checkpoint_equals_the_uninterrupted_run() {
-        let mut straight = SacAgent::new(config(), 4, 2, 3).unwrap();
+    fn resume_equals_the_uninterrupted_run(config: SacConfig) {
+        let mut straight = SacAgent::new(config.clone(), 4, 2, 3).unwrap();
         let mut env = PointMass::new(4, 10);
         for _ in 0..5 {
             straight.iterate(&mut env).unwrap();
         }
         let tmp = tempfile::tempdir().unwrap();
-        let mut first = SacAgent::new(config(), 4, 2, 3).unwrap();
+        let mut first = SacAgent::new(config.clone(), 4, 2, 3).unwrap();
         let mut env = PointMass::new(4, 10);
         for _ in 0..3 {
             first.iterate(&mut env).unwrap();
@@ -254,6 +250,7 @@ mod tests {
         drop(first);
         assert!(is_sac_checkpoint(&tmp.path().join("c")));
         let mut resumed = SacAgent::load(&tmp.path().join("c")).unwrap();
+        assert_eq!(resumed.config, config);
         let mut env = PointMass::new(4, 10);
         for _ in 0..2 {
             resumed.iterate(&mut env).unwrap();
@@ -262,6 +259,27 @@ mod tests {
             resumed.checkpoint_files().unwrap(),
             straight.checkpoint_files().unwrap()
         );
+    }
+
+    #[test]
+    fn resuming_from_a_checkpoint_equals_the_uninterrupted_run() {
+        resume_equals_the_uninterrupted_run(config());
+    }
+
+    /// CrossQ's running statistics, its warm-up position and the delayed
+    /// actor resume exactly too (the warm-up ends inside the run).
+    #[test]
+    fn resuming_crossq_equals_the_uninterrupted_run() {
+        resume_equals_the_uninterrupted_run(SacConfig {
+            critic_hidden_sizes: Some(vec![8]),
+            renorm_warmup_updates: 30,
+            ..SacConfig {
+                variant: crate::sac::SacVariant::CrossQ,
+                policy_delay: 3,
+                adam_beta1: 0.5,
+                ..config()
+            }
+        });
     }
 
     #[test]

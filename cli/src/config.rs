@@ -12,7 +12,7 @@
 //! updates_per_step = 1.0  # gradient steps per transition collected
 //! buffer_size = 200000
 //!
-//! [ppo]                   # learn::PpoConfig; the paper's values are the defaults
+//! [ppo]                   # learn::PpoConfig: the paper's values, but minibatch_size = 128
 //! learning_rate = 2e-4
 //! steps_per_env = 40
 //!
@@ -37,11 +37,11 @@
 //! max_phases = 40
 //! goal_spacing_m = 2.0
 //! start_x_range_m = [-0.5, 0.5]
-//! distance_reward = "progress"   # the paper's; or "new_ground", "forward", "tracking"
+//! distance_reward = "new_ground" # quadwalk's default; "progress" is the paper's; or "forward", "tracking"
 //! forward_reward_per_m = 40.0    # R_d per metre with "forward" (both ways)
 //! target_progress_m = 0.025      # the pace per phase "tracking" pays most for
-//! balance_terms = "paper"        # the paper's; or "penalty": R_o, R_s, R_t, R_r
-//!                                # shifted by their best value (standing earns ~0)
+//! balance_terms = "penalty"      # quadwalk's default: R_o, R_s, R_t, R_r shifted by
+//!                                # their best value (standing earns ~0); "paper": the paper's
 //! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
 //!                                # action is a residual on the crawl (+27 observations)
 //!
@@ -198,22 +198,56 @@ impl PartialEq for SacTable {
     }
 }
 
-/// The SAC settings for `algo`: its defaults ([`Algo::sac_defaults`]) with
-/// the `[sac]` table's values on top. `crossq` with `variant = "sac"` is a
-/// contradiction and an error.
-fn sac_settings(algo: Algo, table: Option<&toml::Table>) -> Result<SacConfig> {
-    let mut merged = match toml::Value::try_from(algo.sac_defaults())? {
+/// `base` with the values of `table` on top (keys `base` does not know are
+/// errors, through the type's `deny_unknown_fields`).
+fn overlay<T: Serialize + serde::de::DeserializeOwned>(
+    base: &T,
+    table: Option<&toml::Table>,
+) -> Result<T> {
+    let mut merged = match toml::Value::try_from(base)? {
         toml::Value::Table(t) => t,
-        _ => unreachable!("SacConfig serialises to a table"),
+        _ => bail!("settings do not serialise to a table"),
     };
     if let Some(table) = table {
         for (key, value) in table {
             merged.insert(key.clone(), value.clone());
         }
     }
-    let sac: SacConfig = toml::Value::Table(merged)
+    toml::Value::Table(merged)
         .try_into()
-        .map_err(|e: toml::de::Error| anyhow!("{}", e.message()))?;
+        .map_err(|e: toml::de::Error| anyhow!("{}", e.message()))
+}
+
+/// The task settings where an experiment is silent: the paper's, but for
+/// the two reward choices with which PPO learns to walk here (BENCHMARKS.md
+/// "Policies that walk"): R_d pays only for new ground (the paper's term
+/// pays for rocking, and a policy learned to rock), and the balance terms
+/// are penalties (the paper's pay ~0.8 per phase for standing still).
+/// `configs/tv2.toml` and the paper's other configs spell out the paper's
+/// values.
+pub fn default_task() -> TaskConfig {
+    TaskConfig {
+        distance_reward: DistanceReward::NewGround,
+        balance_terms: BalanceTerms::Penalty,
+        ..TaskConfig::default()
+    }
+}
+
+/// PPO where an experiment is silent: the paper's, but minibatches of 128
+/// (50 Adam steps per 640-phase iteration; the paper's 4096 makes one
+/// minibatch of 640, 10 steps).
+pub fn default_ppo() -> PpoConfig {
+    PpoConfig {
+        minibatch_size: 128,
+        ..PpoConfig::default()
+    }
+}
+
+/// The SAC settings for `algo`: its defaults ([`Algo::sac_defaults`]) with
+/// the `[sac]` table's values on top. `crossq` with `variant = "sac"` is a
+/// contradiction and an error.
+fn sac_settings(algo: Algo, table: Option<&toml::Table>) -> Result<SacConfig> {
+    let sac: SacConfig = overlay(&algo.sac_defaults(), table)?;
     if algo == Algo::CrossQ && sac.variant != learn::sac::SacVariant::CrossQ {
         bail!("variant = \"sac\" contradicts algo.name = \"crossq\"");
     }
@@ -271,11 +305,10 @@ impl Experiment {
             _ => terrain_from_table(&doc, source)?,
         };
         let ppo: PpoConfig = match doc.get("ppo") {
-            None => PpoConfig::default(),
-            Some(value) => value
-                .clone()
-                .try_into()
-                .map_err(|e: toml::de::Error| anyhow!("config {source} [ppo]: {}", e.message()))?,
+            None => default_ppo(),
+            Some(toml::Value::Table(table)) => overlay(&default_ppo(), Some(table))
+                .map_err(|e| anyhow!("config {source} [ppo]: {e}"))?,
+            Some(_) => bail!("config {source} [ppo]: must be a table"),
         };
         ppo.validate()
             .map_err(|e| anyhow!("config {source} [ppo]: {e}"))?;
@@ -309,7 +342,7 @@ impl Experiment {
             .validate()
             .with_context(|| format!("config {source} [train]"))?;
         let task = match doc.get("task") {
-            None => TaskConfig::default(),
+            None => default_task(),
             Some(value) => {
                 let section: TaskSection =
                     value.clone().try_into().map_err(|e: toml::de::Error| {
@@ -361,10 +394,10 @@ impl Experiment {
     pub fn for_terrain(terrain: TerrainSpec) -> Self {
         Self {
             terrain,
-            task: TaskConfig::default(),
+            task: default_task(),
             physics: WorldConfig::default(),
             algo: Algo::default(),
-            ppo: PpoConfig::default(),
+            ppo: default_ppo(),
             sac: SacConfig::default(),
             sac_table: SacTable::default(),
             train: TrainSettings::default(),
@@ -527,7 +560,7 @@ struct ObservationSection {
 
 impl TaskSection {
     fn resolve(self) -> Result<TaskConfig, String> {
-        let d = TaskConfig::default();
+        let d = default_task();
         let o = ObservationConfig::default();
         let positive = |name: &str, v: Option<f64>, default: f64| match v {
             Some(v) if !(v.is_finite() && v > 0.0) => {
@@ -809,8 +842,13 @@ mod tests {
                 .unwrap()
                 .task
                 .distance_reward,
+            DistanceReward::NewGround,
+            "quadwalk's default: no pay for rocking"
+        );
+        assert_eq!(
+            TaskConfig::default().distance_reward,
             DistanceReward::Progress,
-            "the paper's term by default"
+            "the library's default is the paper's term"
         );
         assert_eq!(
             TaskConfig::default().action_prior,
@@ -963,6 +1001,45 @@ mod tests {
         assert_eq!(
             get("ablation-no-short-history").task.observation.size(),
             102 - 24
+        );
+        // the paper's configs keep the paper's reward and minibatch exactly
+        for (name, e) in &seen {
+            if name.starts_with('t') || name.starts_with("ablation") {
+                assert_eq!(e.task.distance_reward, DistanceReward::Progress, "{name}");
+                assert_eq!(e.task.balance_terms, BalanceTerms::Paper, "{name}");
+                assert_eq!(
+                    e.ppo,
+                    PpoConfig {
+                        steps_per_env: e.ppo.steps_per_env,
+                        ..PpoConfig::default()
+                    },
+                    "{name}"
+                );
+            }
+        }
+        // the shipped policies' recipes are quadwalk's defaults
+        let rigid = get("rigid");
+        assert_eq!(rigid.task, default_task());
+        assert_eq!(rigid.ppo, default_ppo());
+    }
+
+    #[test]
+    fn silent_sections_get_quadwalks_defaults_and_a_ppo_table_overrides_them() {
+        let e = Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "t.toml").unwrap();
+        assert_eq!(e.task.distance_reward, DistanceReward::NewGround);
+        assert_eq!(e.task.balance_terms, BalanceTerms::Penalty);
+        assert_eq!(e.ppo.minibatch_size, 128);
+        assert_eq!(e, Experiment::for_terrain(e.terrain.clone()));
+        let e = Experiment::from_toml("[terrain]\nspec = \"rigid\"\n[ppo]\nepochs = 5\n", "t.toml")
+            .unwrap();
+        assert_eq!((e.ppo.minibatch_size, e.ppo.epochs), (128, 5));
+        let err =
+            Experiment::from_toml("[terrain]\nspec = \"rigid\"\n[ppo]\nepoch = 5\n", "t.toml")
+                .unwrap_err()
+                .to_string();
+        assert!(
+            err.contains("t.toml [ppo]") && err.contains("epoch"),
+            "{err}"
         );
     }
 

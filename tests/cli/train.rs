@@ -755,3 +755,47 @@ fn a_kill_during_a_save_leaves_the_previous_checkpoint_intact() {
         Path::new("checkpoints/iter-000002")
     );
 }
+
+/// Every policy shipped in `policies/` loads on a fresh clone (no run
+/// directory, no optimiser state) and walks a few phases of its own
+/// terrain without error, as `play --checkpoint policies/NAME` would.
+#[test]
+fn the_shipped_policies_load_and_run() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies");
+    let Ok(entries) = std::fs::read_dir(&root) else {
+        println!("no policies/ directory: nothing shipped to check");
+        return;
+    };
+    let mut checked = 0;
+    for entry in entries {
+        let dir = entry.unwrap().path();
+        if !dir.join("policy.toml").is_file() {
+            continue;
+        }
+        let config = std::fs::read_to_string(dir.join("config.toml")).unwrap();
+        let table: toml::Table = config.parse().unwrap();
+        let terrain = table["terrain"]["spec"].as_str().unwrap().to_string();
+        let r = json_of(&[
+            "rollout",
+            "--policy",
+            s(&dir),
+            "--terrain",
+            &terrain,
+            "--phases",
+            "2",
+            "--seed",
+            "7",
+            "--json",
+        ]);
+        assert_eq!(r["phases"].as_u64(), Some(2), "{}: {r}", dir.display());
+        for file in ["README.md", "metrics.jsonl", "policy.safetensors"] {
+            assert!(
+                dir.join(file).is_file(),
+                "{}: {file} missing",
+                dir.display()
+            );
+        }
+        checked += 1;
+    }
+    println!("{checked} shipped policies checked");
+}

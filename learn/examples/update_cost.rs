@@ -46,13 +46,13 @@ fn main() {
             },
         ),
         (
-            "CrossQ, critics 512-512, batch 256 (quadwalk's CrossQ defaults)",
+            "CrossQ, critics 256-256, batch 256 (quadwalk's CrossQ defaults)",
             SacConfig::crossq(),
         ),
         (
-            "CrossQ, critics 256-256, batch 256",
+            "CrossQ, critics 512-512, batch 256",
             SacConfig {
-                critic_hidden_sizes: Some(vec![256, 256]),
+                critic_hidden_sizes: Some(vec![512, 512]),
                 ..SacConfig::crossq()
             },
         ),

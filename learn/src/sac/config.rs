@@ -104,12 +104,14 @@ impl SacConfig {
     /// critics without targets, Adam beta1 0.5, learning rate 1e-3, the actor
     /// and temperature updated every third critic step; the rest as
     /// [`Default`]. The paper's critics are 2048 wide; here they default to
-    /// 512-512 so that an update costs about what the physics of a
-    /// transition does on two cores (BENCHMARKS.md).
+    /// 256-256: on the 2-core machine one gradient step at batch 256 costs
+    /// 52 ms with them, 112 ms with 512-512 and 255 ms with 1024-1024,
+    /// against ~15 ms of physics per transition on 5 cm tiles
+    /// (`cargo run --release -p learn --example update_cost`, BENCHMARKS.md).
     pub fn crossq() -> Self {
         Self {
             variant: SacVariant::CrossQ,
-            critic_hidden_sizes: Some(vec![512, 512]),
+            critic_hidden_sizes: Some(vec![256, 256]),
             learning_rate: 1e-3,
             adam_beta1: 0.5,
             policy_delay: 3,

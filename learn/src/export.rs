@@ -8,8 +8,8 @@
 //! No critic, optimiser state or replay buffer: an exported policy acts
 //! exactly as its checkpoint does (deterministic and sampled actions, tested
 //! bit for bit) but cannot resume training. A PPO export of the paper's
-//! networks is ~180 kB, a SAC one the same, against ~1.5 MB (PPO) and
-//! ~190 MB (SAC with its buffer) for the checkpoints.
+//! networks is ~250 kB (`policies/rigid`), against ~1.5 MB for its
+//! checkpoint and ~190 MB for a SAC checkpoint with a full buffer.
 
 use std::path::Path;
 

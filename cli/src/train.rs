@@ -151,10 +151,6 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
                 "--resume continues the run with its own config.toml; --terrain and --config cannot be given with it"
             );
         }
-        if learn::export::is_exported_policy(resume) {
-            // Learner::load's refusal, before the search for a state file
-            Learner::load(resume).with_context(|| format!("--resume {}", resume.display()))?;
-        }
         let checkpoint =
             resolve_checkpoint(resume).with_context(|| format!("--resume {}", resume.display()))?;
         let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);

@@ -115,11 +115,13 @@ pub(crate) fn tensors_file(tensors: Vec<(String, Tensor)>) -> Result<Vec<u8>, Le
         .map_err(|e| LearnError::Checkpoint(format!("cannot serialise the weights: {e}")))
 }
 
-/// Reads `dir/file` and checks it against the FNV-1a 64 checksum the state
-/// file recorded (hex).
+/// Reads `dir/file` and checks it against the FNV-1a 64 checksum (hex) that
+/// `recorded_in` (the state file, or an exported policy's description)
+/// recorded.
 pub(crate) fn read_checksummed(
     dir: &Path,
     file: &str,
+    recorded_in: &str,
     recorded_hex: &str,
 ) -> Result<Vec<u8>, LearnError> {
     let bytes = fs::read(dir.join(file))
@@ -130,7 +132,7 @@ pub(crate) fn read_checksummed(
             dir,
             file,
             format!(
-                "checksum {checksum} differs from {recorded_hex} recorded in {STATE_FILE}: the file is damaged or truncated"
+                "checksum {checksum} differs from {recorded_hex} recorded in {recorded_in}: the file is damaged or truncated"
             ),
         ));
     }
@@ -347,7 +349,7 @@ impl Trainer {
             .ppo
             .validate()
             .map_err(|e| bad_file(&dir, STATE_FILE, e.to_string()))?;
-        let weights = read_checksummed(&dir, WEIGHTS_FILE, &state.weights_fnv1a64)?;
+        let weights = read_checksummed(&dir, WEIGHTS_FILE, STATE_FILE, &state.weights_fnv1a64)?;
         let file = TensorFile::parse(&weights, &dir, WEIGHTS_FILE)?;
         let rng = rng_from_fields(
             &dir,
@@ -380,8 +382,11 @@ impl Trainer {
 }
 
 /// The checkpoint directory that `path` means: itself when it holds a
-/// state file, else its `latest`.
+/// state file, else its `latest`. An exported policy is refused, naming it.
 pub fn resolve_checkpoint(path: &Path) -> Result<PathBuf, LearnError> {
+    if crate::export::is_exported_policy(path) {
+        return Err(crate::export::not_a_checkpoint(path));
+    }
     if path.join(STATE_FILE).is_file() {
         return Ok(path.to_path_buf());
     }

@@ -130,7 +130,12 @@ impl Learner {
                 )));
             }
         };
-        let weights = read_checksummed_policy(dir, &state.policy_fnv1a64)?;
+        let weights = read_checksummed(
+            dir,
+            POLICY_WEIGHTS_FILE,
+            POLICY_STATE_FILE,
+            &state.policy_fnv1a64,
+        )?;
         let file = TensorFile::parse(&weights, dir, POLICY_WEIGHTS_FILE)?;
         file.load_vars(&learner.acting_vars())?;
         let normalizer = file.load_normalizer(o, state.normalizer_count, clip)?;
@@ -152,13 +157,12 @@ impl Learner {
     }
 }
 
-fn read_checksummed_policy(dir: &Path, recorded_hex: &str) -> Result<Vec<u8>, LearnError> {
-    read_checksummed(dir, POLICY_WEIGHTS_FILE, recorded_hex).map_err(|e| match e {
-        LearnError::Checkpoint(text) => {
-            LearnError::Checkpoint(text.replace("state.toml", POLICY_STATE_FILE))
-        }
-        other => other,
-    })
+/// The error for an exported policy where a checkpoint is needed.
+pub(crate) fn not_a_checkpoint(dir: &Path) -> LearnError {
+    LearnError::Checkpoint(format!(
+        "{}: an exported policy (no critics, optimiser state or replay buffer): it can act but training cannot resume from it; resume from the run's checkpoint",
+        dir.display()
+    ))
 }
 
 #[cfg(test)]

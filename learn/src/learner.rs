@@ -73,14 +73,9 @@ pub enum LearnerStats {
 
 impl Learner {
     /// Loads a checkpoint of either algorithm (told apart by its state file).
-    /// An exported policy ([`crate::export`]) is refused: it cannot resume.
+    /// An exported policy ([`crate::export`]) is refused
+    /// ([`crate::checkpoint::resolve_checkpoint`]): it cannot resume.
     pub fn load(dir: &Path) -> Result<Self, LearnError> {
-        if crate::export::is_exported_policy(dir) {
-            return Err(LearnError::Checkpoint(format!(
-                "{}: an exported policy (no critics, optimiser state or replay buffer): it can act but training cannot resume from it; resume from the run's checkpoint",
-                dir.display()
-            )));
-        }
         if is_sac_checkpoint(dir) {
             Ok(Self::Sac(Box::new(SacAgent::load(dir)?)))
         } else {

@@ -86,7 +86,17 @@ fn metrics_without_timing(run: &Path) -> Vec<Value> {
 /// `train --config CONFIG --run-dir RUN --iterations N --threads 2`, which
 /// must succeed; returns its stderr.
 fn train_on_two_threads(config: &Path, run: &Path, iterations: &str) -> String {
-    ok(&[
+    train_on_two_threads_with(config, run, iterations, &[])
+}
+
+/// [`train_on_two_threads`] with `extra` flags after the others.
+fn train_on_two_threads_with(
+    config: &Path,
+    run: &Path,
+    iterations: &str,
+    extra: &[&str],
+) -> String {
+    let mut args = vec![
         "train",
         "--config",
         s(config),
@@ -98,7 +108,9 @@ fn train_on_two_threads(config: &Path, run: &Path, iterations: &str) -> String {
         "2",
         "--rerun",
         "off",
-    ])
+    ];
+    args.extend_from_slice(extra);
+    ok(&args)
 }
 
 /// `train --resume RUN --iterations N --threads 2`, which must succeed.
@@ -309,21 +321,7 @@ fn crossq_trains_and_exported_policies_act_as_their_checkpoints() {
     std::fs::write(&config, format!("{TINY}{TINY_SAC}")).unwrap();
     let (a, b) = (dir.join("a"), dir.join("b"));
     let train = |run: &Path, iterations: &str| {
-        ok(&[
-            "train",
-            "--config",
-            s(&config),
-            "--algo",
-            "crossq",
-            "--run-dir",
-            s(run),
-            "--iterations",
-            iterations,
-            "--threads",
-            "2",
-            "--rerun",
-            "off",
-        ])
+        train_on_two_threads_with(&config, run, iterations, &["--algo", "crossq"])
     };
     let progress = train(&a, "3");
     assert!(progress.contains("training (crossq)"), "{progress}");

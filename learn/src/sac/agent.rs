@@ -507,24 +507,31 @@ mod tests {
         }
     }
 
-    /// PPO's toy test allows 32,000 steps to pass a return of -10 (random:
-    /// about -20, straight to the target: about -5). SAC must do it within
-    /// 8,000.
-    #[test]
-    fn sac_learns_the_point_mass_in_a_quarter_of_ppos_samples() {
+    /// Trains `agent` on the point mass (16 worlds, 25-step episodes) until
+    /// an iteration's mean return passes -10 after the first 800 steps, or
+    /// 8,000 steps are spent; returns the steps it took (if it passed) and
+    /// every iteration's mean return.
+    fn steps_to_pass_minus_ten(agent: &mut SacAgent) -> (Option<u64>, Vec<f64>) {
         let mut env = PointMass::new(16, 25);
-        let mut agent = SacAgent::new(toy_config(), 4, 2, 5).unwrap();
         let mut history = Vec::new();
-        let mut reached = None;
         while agent.total_steps < 8_000 {
             let stats = agent.iterate(&mut env).unwrap();
             let r = stats.mean_episode_return.unwrap();
             history.push(r);
             if stats.total_steps > 800 && r > -10.0 {
-                reached = Some(stats.total_steps);
-                break;
+                return (Some(stats.total_steps), history);
             }
         }
+        (None, history)
+    }
+
+    /// PPO's toy test allows 32,000 steps to pass a return of -10 (random:
+    /// about -20, straight to the target: about -5). SAC must do it within
+    /// 8,000.
+    #[test]
+    fn sac_learns_the_point_mass_in_a_quarter_of_ppos_samples() {
+        let mut agent = SacAgent::new(toy_config(), 4, 2, 5).unwrap();
+        let (reached, history) = steps_to_pass_minus_ten(&mut agent);
         assert!(
             history[0] < -14.0,
             "random actions should do poorly: {history:?}"
@@ -545,7 +552,6 @@ mod tests {
     /// step) passes the same bar.
     #[test]
     fn crossq_learns_the_point_mass_in_a_quarter_of_ppos_samples() {
-        let mut env = PointMass::new(16, 25);
         let config = SacConfig {
             critic_hidden_sizes: Some(vec![128, 128]),
             renorm_warmup_updates: 1_000,
@@ -557,17 +563,7 @@ mod tests {
             }
         };
         let mut agent = SacAgent::new(config, 4, 2, 5).unwrap();
-        let mut history = Vec::new();
-        let mut reached = None;
-        while agent.total_steps < 8_000 {
-            let stats = agent.iterate(&mut env).unwrap();
-            let r = stats.mean_episode_return.unwrap();
-            history.push(r);
-            if stats.total_steps > 800 && r > -10.0 {
-                reached = Some(stats.total_steps);
-                break;
-            }
-        }
+        let (reached, history) = steps_to_pass_minus_ten(&mut agent);
         assert!(
             reached.is_some(),
             "CrossQ did not pass -10 in 8,000 steps: returns {history:?}"

@@ -154,8 +154,8 @@ impl SacAgent {
                 state.update_debt
             )));
         }
-        let weights = read_checksummed(&dir, WEIGHTS_FILE, &state.weights_fnv1a64)?;
-        let replay = read_checksummed(&dir, REPLAY_FILE, &state.replay_fnv1a64)?;
+        let weights = read_checksummed(&dir, WEIGHTS_FILE, STATE_FILE, &state.weights_fnv1a64)?;
+        let replay = read_checksummed(&dir, REPLAY_FILE, STATE_FILE, &state.replay_fnv1a64)?;
         let rng = rng_from_fields(
             &dir,
             &state.rng_seed_hex,

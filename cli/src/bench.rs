@@ -13,6 +13,7 @@ use robot::task::{Task, TaskConfig};
 use viz::{RerunSink, RolloutLogger};
 
 use crate::commands::{load_robot, make_world, parse_spec, positive_seconds};
+use terrain_plugins::Registry;
 
 /// The default scenes: rigid ground, the paper's elastic scene (15 x 5 tiles
 /// around the robot) and the default 20 m long elastic terrain.
@@ -59,11 +60,17 @@ struct Measurement {
     runs_steps_per_s: Vec<f64>,
 }
 
-fn measure(spec: &str, threads: usize, seconds: f64, repeat: u32) -> Result<Measurement> {
+fn measure(
+    registry: &Registry,
+    spec: &str,
+    threads: usize,
+    seconds: f64,
+    repeat: u32,
+) -> Result<Measurement> {
     let mut runs = Vec::new();
     let mut last = None;
     for _ in 0..repeat {
-        let m = measure_once(spec, threads, seconds)?;
+        let m = measure_once(registry, spec, threads, seconds)?;
         runs.push(m.steps_per_s);
         last = Some(m);
     }
@@ -109,8 +116,13 @@ fn on_each_thread<S, R: Send>(
     })
 }
 
-fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement> {
-    let spec = parse_spec(spec)?;
+fn measure_once(
+    registry: &Registry,
+    spec: &str,
+    threads: usize,
+    seconds: f64,
+) -> Result<Measurement> {
+    let spec = parse_spec(registry, spec)?;
     let model = load_robot(None)?;
     let steps = (seconds / robot::DT_SECS).round().max(1.0) as u64;
     let settle_steps = 240;
@@ -118,7 +130,7 @@ fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement>
     let runs = on_each_thread(
         threads,
         |_| {
-            let mut world = make_world(&spec, model.clone(), 0, [0.0, 0.0], &physics)?;
+            let mut world = make_world(registry, &spec, model.clone(), 0, [0.0, 0.0], &physics)?;
             for _ in 0..settle_steps {
                 world.step();
             }
@@ -148,18 +160,26 @@ fn measure_once(spec: &str, threads: usize, seconds: f64) -> Result<Measurement>
 /// starting a new episode whenever one ends. Episode resets are not timed.
 /// With `logger`, the world on thread 0 is streamed.
 fn measure_phases(
+    registry: &Registry,
     spec: &str,
     threads: usize,
     phases: u32,
     logger: Option<&Mutex<RolloutLogger>>,
 ) -> Result<f64> {
-    let spec = parse_spec(spec)?;
+    let spec = parse_spec(registry, spec)?;
     let model = load_robot(None)?;
     let physics = robot::WorldConfig::default();
     let timed = on_each_thread(
         threads,
         |t| {
-            let world = make_world(&spec, model.clone(), t as u64, [0.0, 0.0], &physics)?;
+            let world = make_world(
+                registry,
+                &spec,
+                model.clone(),
+                t as u64,
+                [0.0, 0.0],
+                &physics,
+            )?;
             let mut task = Task::new(world, TaskConfig::default(), t as u64);
             let mut obs = vec![0.0f32; task.observation_size()];
             task.reset(&mut obs);
@@ -203,7 +223,7 @@ fn measure_phases(
     Ok((phases as usize * threads) as f64 / slowest)
 }
 
-pub fn run(args: &BenchArgs) -> Result<()> {
+pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
     let terrains: Vec<String> = if args.terrains.is_empty() {
         DEFAULT_TERRAINS.iter().map(ToString::to_string).collect()
     } else {
@@ -211,7 +231,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     // Check every spec before the long runs start.
     for spec in &terrains {
-        parse_spec(spec)?;
+        parse_spec(registry, spec)?;
     }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut threads: Vec<usize> = args.threads.iter().map(|&t| t as usize).collect();
@@ -235,7 +255,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut phase_rates = Vec::new();
     for spec in &terrains {
         for &n in &threads {
-            let m = measure(spec, n, args.seconds, args.repeat)?;
+            let m = measure(registry, spec, n, args.seconds, args.repeat)?;
             if !args.json {
                 out!(
                     "{:<48} {:>6} tiles  {:>2} thread(s)  {:>9.0} steps/s  {:>8.0} steps/s per world",
@@ -247,7 +267,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 );
             }
             if args.phases > 0 {
-                let phases_per_s = measure_phases(spec, n, args.phases, logger.as_ref())?;
+                let phases_per_s = measure_phases(registry, spec, n, args.phases, logger.as_ref())?;
                 if !args.json {
                     out!(
                         "{:<48} {:>6} {:>2} thread(s)  {:>9.1} phases/s  {:>8.1} ms per phase per world",

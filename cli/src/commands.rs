@@ -42,14 +42,15 @@ pub fn load_robot(path: Option<&Path>) -> Result<Arc<RobotModel>> {
     }))
 }
 
-/// Parses a spec with the built-in registry.
-pub fn parse_spec(spec: &str) -> Result<TerrainSpec> {
-    Ok(Registry::builtin().parse(spec)?)
+/// Parses a spec with the app's terrain plugins.
+pub fn parse_spec(registry: &Registry, spec: &str) -> Result<TerrainSpec> {
+    Ok(registry.parse(spec)?)
 }
 
 /// Builds one world: terrain from `spec`, robot standing at (x, y),
 /// simulated with `physics`.
 pub fn make_world(
+    registry: &Registry,
     spec: &TerrainSpec,
     model: Arc<RobotModel>,
     seed: u64,
@@ -61,7 +62,7 @@ pub fn make_world(
         seed,
         ..BuildContext::default()
     };
-    let terrain = Registry::builtin().create_from_spec(spec, &ctx);
+    let terrain = create_terrain(registry, spec, &ctx)?;
     let extent = terrain.extent();
     if !extent.contains(xy_m) {
         anyhow::bail!(
@@ -78,8 +79,24 @@ pub fn make_world(
         .with_context(|| format!("cannot place the robot on {spec}"))
 }
 
-pub fn terrain_list() -> Result<()> {
-    let registry = Registry::builtin();
+/// The terrain `spec` describes, made by `registry`'s plugin of its name.
+/// A spec parsed by another registry (e.g. read back from a checkpoint made
+/// by a binary with more plugins) names the missing plugin.
+pub fn create_terrain(
+    registry: &Registry,
+    spec: &TerrainSpec,
+    ctx: &BuildContext,
+) -> Result<Box<dyn terrain_plugins::Terrain>> {
+    if registry.get(spec.plugin()).is_none() {
+        // Parsing the text again gives the registry's own error, which names
+        // the plugin and says how to register it.
+        registry.parse(&spec.to_string())?;
+        anyhow::bail!("terrain {spec}: no plugin named {:?}", spec.plugin());
+    }
+    Ok(registry.create_from_spec(spec, ctx))
+}
+
+pub fn terrain_list(registry: &Registry) -> Result<()> {
     for plugin in registry.plugins() {
         out!("{:<10} {}", plugin.name(), plugin.summary());
         out!("           usage: {}", Registry::usage(plugin));
@@ -95,15 +112,21 @@ pub fn terrain_list() -> Result<()> {
     Ok(())
 }
 
-pub fn terrain_show(spec: &str, robot: Option<&Path>, seed: u64, as_json: bool) -> Result<()> {
-    let spec = parse_spec(spec)?;
+pub fn terrain_show(
+    registry: &Registry,
+    spec: &str,
+    robot: Option<&Path>,
+    seed: u64,
+    as_json: bool,
+) -> Result<()> {
+    let spec = parse_spec(registry, spec)?;
     let model = load_robot(robot)?;
     let ctx = BuildContext {
         supported_mass_kg: model.total_mass_kg(),
         seed,
         ..BuildContext::default()
     };
-    let terrain = Registry::builtin().create_from_spec(&spec, &ctx);
+    let terrain = create_terrain(registry, &spec, &ctx)?;
     if as_json {
         let e = terrain.extent();
         let regions: Vec<_> = terrain
@@ -193,10 +216,11 @@ pub struct SceneArgs {
 impl SceneArgs {
     /// The experiment these flags name: the config file, or the terrain
     /// spec (default `elastic:5cm`) with the default task.
-    pub fn experiment(&self) -> Result<crate::config::Experiment> {
+    pub fn experiment(&self, registry: &Registry) -> Result<crate::config::Experiment> {
         match (&self.config, &self.terrain) {
-            (Some(path), _) => crate::config::Experiment::from_file(path),
+            (Some(path), _) => crate::config::Experiment::from_file(path, registry),
             (None, terrain) => Ok(crate::config::Experiment::for_terrain(parse_spec(
+                registry,
                 terrain.as_deref().unwrap_or("elastic:5cm"),
             )?)),
         }
@@ -243,11 +267,18 @@ pub struct StandArgs {
     rerun: crate::viz_args::RerunArgs,
 }
 
-pub fn stand(args: &StandArgs) -> Result<()> {
-    let experiment = args.scene.experiment()?;
+pub fn stand(registry: &Registry, args: &StandArgs) -> Result<()> {
+    let experiment = args.scene.experiment(registry)?;
     let (spec, physics) = (experiment.terrain, experiment.physics);
     let model = args.scene.robot()?;
-    let mut world = make_world(&spec, model.clone(), args.seed, [args.x, args.y], &physics)?;
+    let mut world = make_world(
+        registry,
+        &spec,
+        model.clone(),
+        args.seed,
+        [args.x, args.y],
+        &physics,
+    )?;
     let mut logger = args.rerun.open(
         viz::RerunSink::Off,
         &model,

@@ -279,15 +279,16 @@ struct StageSection {
 }
 
 impl Experiment {
-    /// Reads an experiment file.
-    pub fn from_file(path: &Path) -> Result<Self> {
+    /// Reads an experiment file; its terrain specs are parsed with `registry`.
+    pub fn from_file(path: &Path, registry: &Registry) -> Result<Self> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("config {}: cannot read it", path.display()))?;
-        Self::from_toml(&text, &path.display().to_string())
+        Self::from_toml(&text, &path.display().to_string(), registry)
     }
 
-    /// Parses TOML text; `source` names it in errors.
-    pub fn from_toml(text: &str, source: &str) -> Result<Self> {
+    /// Parses TOML text; `source` names it in errors; terrain specs are
+    /// parsed with `registry`.
+    pub fn from_toml(text: &str, source: &str, registry: &Registry) -> Result<Self> {
         let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
             anyhow!("config {source}: not valid TOML: {}", e.message())
         })?;
@@ -299,10 +300,10 @@ impl Experiment {
                 );
             }
         }
-        let curriculum = curriculum_from_doc(&doc, source)?;
+        let curriculum = curriculum_from_doc(&doc, source, registry)?;
         let terrain = match (doc.get("terrain"), curriculum.first()) {
             (None, Some(first)) => first.terrain.clone(),
-            _ => terrain_from_table(&doc, source)?,
+            _ => terrain_from_table(&doc, source, registry)?,
         };
         let ppo: PpoConfig = match doc.get("ppo") {
             None => default_ppo(),
@@ -495,7 +496,7 @@ impl Experiment {
 }
 
 /// Reads `[[curriculum]]`; `source` names the file in errors.
-fn curriculum_from_doc(doc: &toml::Table, source: &str) -> Result<Vec<Stage>> {
+fn curriculum_from_doc(doc: &toml::Table, source: &str, registry: &Registry) -> Result<Vec<Stage>> {
     let Some(value) = doc.get("curriculum") else {
         return Ok(Vec::new());
     };
@@ -508,7 +509,6 @@ fn curriculum_from_doc(doc: &toml::Table, source: &str) -> Result<Vec<Stage>> {
     if stages.is_empty() {
         bail!("config {source} [[curriculum]]: no stages");
     }
-    let registry = Registry::builtin();
     stages
         .into_iter()
         .enumerate()
@@ -705,14 +705,13 @@ impl PhysicsSection {
 }
 
 /// Reads the `[terrain]` section of a parsed file; `source` names it in errors.
-fn terrain_from_table(doc: &toml::Table, source: &str) -> Result<TerrainSpec> {
+fn terrain_from_table(doc: &toml::Table, source: &str, registry: &Registry) -> Result<TerrainSpec> {
     let section = doc
         .get("terrain")
         .ok_or_else(|| anyhow!("config {source}: no [terrain] section"))?;
     let table = section
         .as_table()
         .ok_or_else(|| anyhow!("config {source}: terrain must be a table ([terrain])"))?;
-    let registry = Registry::builtin();
     let name = format!("{source} [terrain]");
     match (table.get("spec"), table.get("plugin")) {
         (Some(_), Some(_)) => bail!(
@@ -768,13 +767,20 @@ fn value_text(value: &toml::Value) -> Result<String> {
 mod tests {
     use super::*;
 
+    impl Experiment {
+        /// [`Experiment::from_toml`] with the built-in terrains.
+        fn from_toml_builtin(text: &str, source: &str) -> Result<Self> {
+            Self::from_toml(text, source, &Registry::builtin())
+        }
+    }
+
     fn terrain_from_toml(text: &str, source: &str) -> Result<TerrainSpec> {
-        Experiment::from_toml(text, source).map(|e| e.terrain)
+        Experiment::from_toml_builtin(text, source).map(|e| e.terrain)
     }
 
     #[test]
     fn task_section_sets_the_task_and_refuses_unknown_keys() {
-        let e = Experiment::from_toml(
+        let e = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[task]\nmax_phases = 12\ndistance_reward = \"new_ground\"\naction_prior = \"scripted_crawl\"\n[task.observation]\nfoot_history = false\n",
             "t.toml",
         )
@@ -783,7 +789,7 @@ mod tests {
         assert_eq!(e.task.action_prior, ActionPrior::ScriptedCrawl);
         assert_eq!(e.task.observation_size(), 102 - 36 + 27);
         assert_eq!(e.task.distance_reward, DistanceReward::NewGround);
-        let f = Experiment::from_toml(
+        let f = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"forward\"\nforward_reward_per_m = 30.0\ntarget_progress_m = 0.03\nbalance_terms = \"penalty\"\n[algo]\nname = \"sac\"\n[sac]\nupdates_per_step = 2.0\n",
             "t.toml",
         )
@@ -795,7 +801,7 @@ mod tests {
         assert_eq!(f.algo, learn::Algo::Sac);
         assert_eq!(f.sac.updates_per_step, 2.0);
         assert_eq!(
-            Experiment::from_toml(&f.to_toml(), "round trip").unwrap(),
+            Experiment::from_toml_builtin(&f.to_toml(), "round trip").unwrap(),
             f
         );
         // --algo crossq: CrossQ's defaults under the file's [sac] values
@@ -805,19 +811,19 @@ mod tests {
         assert_eq!(g.sac.policy_delay, 3);
         assert_eq!(g.sac.updates_per_step, 2.0);
         assert_eq!(
-            Experiment::from_toml(&g.to_toml(), "round trip")
+            Experiment::from_toml_builtin(&g.to_toml(), "round trip")
                 .unwrap()
                 .sac,
             g.sac
         );
-        let crossq = Experiment::from_toml(
+        let crossq = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[algo]\nname = \"crossq\"\n[sac]\nlearning_rate = 3e-4\n",
             "t.toml",
         )
         .unwrap();
         assert_eq!(crossq.sac.learning_rate, 3e-4);
         assert_eq!(crossq.sac.adam_beta1, 0.5);
-        let err = Experiment::from_toml(
+        let err = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[algo]\nname = \"crossq\"\n[sac]\nvariant = \"sac\"\n",
             "t.toml",
         )
@@ -827,7 +833,7 @@ mod tests {
             err.contains("[sac]") && err.contains("contradicts"),
             "{err}"
         );
-        let err = Experiment::from_toml(
+        let err = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[sac]\npolicy_delay = 0\n",
             "t.toml",
         )
@@ -838,7 +844,7 @@ mod tests {
             "{err}"
         );
         assert_eq!(
-            Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "t.toml")
+            Experiment::from_toml_builtin("[terrain]\nspec = \"rigid\"\n", "t.toml")
                 .unwrap()
                 .task
                 .distance_reward,
@@ -887,7 +893,10 @@ mod tests {
                 "action_prior must be \"none\" (the paper's) or \"scripted_crawl\", got \"crawl\"",
             ),
         ] {
-            let err = format!("{:#}", Experiment::from_toml(text, "t.toml").unwrap_err());
+            let err = format!(
+                "{:#}",
+                Experiment::from_toml_builtin(text, "t.toml").unwrap_err()
+            );
             assert!(
                 err.contains(expected) && err.contains("t.toml [task]"),
                 "{text:?} gave {err:?}"
@@ -898,21 +907,24 @@ mod tests {
     #[test]
     fn resolved_toml_parses_back_to_the_same_experiment() {
         let text = "[[curriculum]]\nterrain = \"varying:2m:2,3,4,5cm,rigid\"\niterations = 3\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n[ppo]\nlearning_rate = 1e-3\ntarget_kl = 0.02\n[train]\nenvs = 4\nrerun_envs = [0, 3]\n[task]\nmax_phases = 12\ndistance_reward = \"new_ground\"\naction_prior = \"scripted_crawl\"\n[task.observation]\nshort_history = false\n";
-        let e = Experiment::from_toml(text, "c.toml").unwrap();
+        let e = Experiment::from_toml_builtin(text, "c.toml").unwrap();
         assert_eq!(e.total_iterations(), 5);
         assert_eq!(e.terrain.to_string(), "varying:2m:2cm,3cm,4cm,5cm,rigid");
         assert_eq!(e.terrain_at(2).0, 0);
         assert_eq!(e.terrain_at(3).1.to_string(), "elastic:5cm");
         assert_eq!(e.terrain_at(99).0, 1);
-        let back = Experiment::from_toml(&e.to_toml(), "resolved").unwrap();
+        let back = Experiment::from_toml_builtin(&e.to_toml(), "resolved").unwrap();
         assert_eq!(back, e);
         let plain = Experiment::for_terrain(Registry::builtin().parse("rigid").unwrap());
-        assert_eq!(Experiment::from_toml(&plain.to_toml(), "r").unwrap(), plain);
+        assert_eq!(
+            Experiment::from_toml_builtin(&plain.to_toml(), "r").unwrap(),
+            plain
+        );
     }
 
     #[test]
     fn physics_section_sets_the_world_and_round_trips() {
-        let e = Experiment::from_toml(
+        let e = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[physics]\npd = \"motor\"\nsubsteps = 4\npgs_iterations = 1\nccd = false\nkd_n_m_s_per_rad = 5.0\n",
             "p.toml",
         )
@@ -926,8 +938,12 @@ mod tests {
             e.physics.kp_n_m_per_rad,
             WorldConfig::default().kp_n_m_per_rad
         );
-        assert_eq!(Experiment::from_toml(&e.to_toml(), "resolved").unwrap(), e);
-        let plain = Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "p.toml").unwrap();
+        assert_eq!(
+            Experiment::from_toml_builtin(&e.to_toml(), "resolved").unwrap(),
+            e
+        );
+        let plain =
+            Experiment::from_toml_builtin("[terrain]\nspec = \"rigid\"\n", "p.toml").unwrap();
         assert_eq!(plain.physics, WorldConfig::default());
         for (text, expected) in [
             (
@@ -957,7 +973,10 @@ mod tests {
             ("[physics]\nsolver = 3\n", "unknown field `solver`"),
         ] {
             let text = format!("[terrain]\nspec = \"rigid\"\n{text}");
-            let err = format!("{:#}", Experiment::from_toml(&text, "p.toml").unwrap_err());
+            let err = format!(
+                "{:#}",
+                Experiment::from_toml_builtin(&text, "p.toml").unwrap_err()
+            );
             assert!(
                 err.contains(expected) && err.contains("p.toml [physics]"),
                 "{text:?} gave {err:?}"
@@ -972,7 +991,8 @@ mod tests {
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "toml") {
-                let e = Experiment::from_file(&path).unwrap_or_else(|e| panic!("{e:#}"));
+                let e = Experiment::from_file(&path, &Registry::builtin())
+                    .unwrap_or_else(|e| panic!("{e:#}"));
                 seen.push((path.file_stem().unwrap().to_string_lossy().to_string(), e));
             }
         }
@@ -1025,18 +1045,23 @@ mod tests {
 
     #[test]
     fn silent_sections_get_quadwalks_defaults_and_a_ppo_table_overrides_them() {
-        let e = Experiment::from_toml("[terrain]\nspec = \"rigid\"\n", "t.toml").unwrap();
+        let e = Experiment::from_toml_builtin("[terrain]\nspec = \"rigid\"\n", "t.toml").unwrap();
         assert_eq!(e.task.distance_reward, DistanceReward::NewGround);
         assert_eq!(e.task.balance_terms, BalanceTerms::Penalty);
         assert_eq!(e.ppo.minibatch_size, 128);
         assert_eq!(e, Experiment::for_terrain(e.terrain.clone()));
-        let e = Experiment::from_toml("[terrain]\nspec = \"rigid\"\n[ppo]\nepochs = 5\n", "t.toml")
-            .unwrap();
+        let e = Experiment::from_toml_builtin(
+            "[terrain]\nspec = \"rigid\"\n[ppo]\nepochs = 5\n",
+            "t.toml",
+        )
+        .unwrap();
         assert_eq!((e.ppo.minibatch_size, e.ppo.epochs), (128, 5));
-        let err =
-            Experiment::from_toml("[terrain]\nspec = \"rigid\"\n[ppo]\nepoch = 5\n", "t.toml")
-                .unwrap_err()
-                .to_string();
+        let err = Experiment::from_toml_builtin(
+            "[terrain]\nspec = \"rigid\"\n[ppo]\nepoch = 5\n",
+            "t.toml",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(
             err.contains("t.toml [ppo]") && err.contains("epoch"),
             "{err}"
@@ -1072,7 +1097,10 @@ mod tests {
             ),
             ("[[curriculum]]\nterrain = \"rigid\"\n", "iterations"),
         ] {
-            let err = format!("{:#}", Experiment::from_toml(text, "t.toml").unwrap_err());
+            let err = format!(
+                "{:#}",
+                Experiment::from_toml_builtin(text, "t.toml").unwrap_err()
+            );
             assert!(
                 err.contains(expected) && err.contains("t.toml"),
                 "{text:?} gave {err:?}"

@@ -46,7 +46,7 @@ fn metrics_up_to(path: &Path, iteration: u64) -> Result<Vec<u8>> {
 }
 
 /// `quadwalk export`.
-pub fn export(args: &ExportArgs) -> Result<()> {
+pub fn export(registry: &terrain_plugins::Registry, args: &ExportArgs) -> Result<()> {
     if args.out.exists() {
         bail!(
             "--out {}: already exists; export writes a new directory",
@@ -61,7 +61,7 @@ pub fn export(args: &ExportArgs) -> Result<()> {
     let config = std::fs::read(&config_path)
         .with_context(|| format!("--checkpoint {}: {CONFIG_FILE}", args.checkpoint.display()))?;
     // the experiment must parse: a policy without its task settings is unusable
-    crate::config::Experiment::from_file(&config_path)?;
+    crate::config::Experiment::from_file(&config_path, registry)?;
     let mut files = learner.policy_files()?;
     files.push((CONFIG_FILE.to_string(), config));
     let run_dir = if args.checkpoint.join(LATEST_LINK).exists() {

@@ -30,7 +30,11 @@ impl Policy {
     /// `scripted`, or the path of a checkpoint, a run directory or an
     /// exported policy (`quadwalk export`); `sample_seed` makes a trained
     /// policy sample its actions.
-    pub fn from_arg(arg: &str, sample_seed: Option<u64>) -> Result<Self> {
+    pub fn from_arg(
+        registry: &terrain_plugins::Registry,
+        arg: &str,
+        sample_seed: Option<u64>,
+    ) -> Result<Self> {
         if arg == "scripted" {
             if sample_seed.is_some() {
                 bail!(
@@ -52,8 +56,9 @@ impl Policy {
         };
         let learner =
             learn::Learner::load_for_acting(&dir).with_context(|| format!("policy {arg}"))?;
-        let config = crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE))
-            .with_context(|| format!("policy {arg}"))?;
+        let config =
+            crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE), registry)
+                .with_context(|| format!("policy {arg}"))?;
         let (task, physics) = (config.task, config.physics);
         if learner.obs_size() != task.observation_size()
             || learner.action_size() != robot::action::ACTION_SIZE

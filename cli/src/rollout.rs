@@ -14,6 +14,7 @@ use viz::RerunSink;
 use crate::commands::{SceneArgs, make_world};
 use crate::policy::Policy;
 use crate::viz_args::{RerunArgs, print_warnings};
+use terrain_plugins::Registry;
 
 /// The flags `rollout` and `play` share with the same defaults.
 #[derive(Debug, Args)]
@@ -83,30 +84,36 @@ struct Run<'a> {
 }
 
 /// `quadwalk rollout`.
-pub fn rollout(args: &RolloutArgs) -> Result<()> {
-    run(&Run {
-        command: "rollout",
-        policy: &args.policy,
-        scene: &args.scene,
-        phases: args.phases,
-        flags: &args.flags,
-        rerun: &args.rerun,
-        default_sink: RerunSink::Off,
-    })
+pub fn rollout(registry: &Registry, args: &RolloutArgs) -> Result<()> {
+    run(
+        registry,
+        &Run {
+            command: "rollout",
+            policy: &args.policy,
+            scene: &args.scene,
+            phases: args.phases,
+            flags: &args.flags,
+            rerun: &args.rerun,
+            default_sink: RerunSink::Off,
+        },
+    )
 }
 
 /// `quadwalk play`.
-pub fn play(args: &PlayArgs) -> Result<()> {
+pub fn play(registry: &Registry, args: &PlayArgs) -> Result<()> {
     let checkpoint = args.checkpoint.as_ref().map(|p| p.display().to_string());
-    run(&Run {
-        command: "play",
-        policy: checkpoint.as_deref().unwrap_or(&args.policy),
-        scene: &args.scene,
-        phases: args.phases,
-        flags: &args.flags,
-        rerun: &args.rerun,
-        default_sink: RerunSink::Spawn,
-    })
+    run(
+        registry,
+        &Run {
+            command: "play",
+            policy: checkpoint.as_deref().unwrap_or(&args.policy),
+            scene: &args.scene,
+            phases: args.phases,
+            flags: &args.flags,
+            rerun: &args.rerun,
+            default_sink: RerunSink::Spawn,
+        },
+    )
 }
 
 /// Summary statistics of a series.
@@ -119,18 +126,26 @@ fn stats(values: &[f64]) -> serde_json::Value {
     json!({ "mean": mean, "std": std, "min": min, "max": max })
 }
 
-fn run(args: &Run) -> Result<()> {
-    let experiment = args.scene.experiment()?;
+fn run(registry: &Registry, args: &Run) -> Result<()> {
+    let experiment = args.scene.experiment(registry)?;
     let (spec, mut task_config, mut physics) =
         (experiment.terrain, experiment.task, experiment.physics);
     let mut policy = Policy::from_arg(
+        registry,
         args.policy,
         args.flags.stochastic.then_some(args.flags.seed),
     )?;
     policy.fit_scene(&mut task_config, &mut physics, None)?;
     task_config.max_phases = args.phases as usize;
     let model = args.scene.robot()?;
-    let world = make_world(&spec, model, args.flags.seed, [0.0, 0.0], &physics)?;
+    let world = make_world(
+        registry,
+        &spec,
+        model,
+        args.flags.seed,
+        [0.0, 0.0],
+        &physics,
+    )?;
     let mut task = Task::new(world, task_config, args.flags.seed);
     let mut logger = args.rerun.open(
         args.default_sink.clone(),

@@ -14,7 +14,7 @@ use robot::action::ACTION_SIZE;
 use robot::snapshot::{NoObserver, PhaseObserver, PhaseStart};
 use robot::task::{PhaseOutcome, RewardTerms, Task, TaskConfig};
 use robot::{RobotModel, WorldConfig};
-use terrain_plugins::TerrainSpec;
+use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
 
 use crate::commands::make_world;
@@ -74,6 +74,7 @@ impl PhaseObserver for Timed<'_> {
 /// state whether the run was resumed or not.
 pub struct TaskEnv {
     tasks: Vec<Task>,
+    registry: Arc<Registry>,
     terrain: TerrainSpec,
     model: Arc<RobotModel>,
     task_config: TaskConfig,
@@ -94,6 +95,7 @@ impl TaskEnv {
     /// task and physics; world `i`'s terrain draw is seeded by
     /// `(experiment.train.seed, i)`. Stepped on `threads` threads.
     pub fn new(
+        registry: &Arc<Registry>,
         terrain: &TerrainSpec,
         model: &Arc<RobotModel>,
         experiment: &Experiment,
@@ -113,6 +115,7 @@ impl TaskEnv {
             obs_size: task.observation_size(),
             loggers: (0..envs).map(|_| None).collect(),
             tasks: Vec::new(),
+            registry: registry.clone(),
             terrain: terrain.clone(),
             model: model.clone(),
             task_config: task.clone(),
@@ -128,7 +131,8 @@ impl TaskEnv {
 
     /// Fresh tasks for environments `0..envs`, built in parallel.
     fn build_tasks(&self, envs: usize) -> Result<Vec<Task>> {
-        let (terrain, model, config, physics, seed) = (
+        let (registry, terrain, model, config, physics, seed) = (
+            &self.registry,
             &self.terrain,
             &self.model,
             &self.task_config,
@@ -140,6 +144,7 @@ impl TaskEnv {
                 .into_par_iter()
                 .map(|i| {
                     let world = make_world(
+                        registry,
                         terrain,
                         model.clone(),
                         derive_seed(seed, i as u64),

@@ -28,6 +28,7 @@ use learn::checkpoint::{
 use learn::sac::SacAgent;
 use learn::{Algo, Learner, LearnerStats, Trainer};
 use serde_json::json;
+use terrain_plugins::Registry;
 use viz::RerunSink;
 
 use crate::commands::SceneArgs;
@@ -140,7 +141,7 @@ fn utc_stamp(unix_secs: u64) -> String {
     )
 }
 
-fn plan(args: &TrainArgs) -> Result<Plan> {
+fn plan(registry: &Registry, args: &TrainArgs) -> Result<Plan> {
     let threads = match args.threads {
         Some(t) => t as usize,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -154,7 +155,7 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
         let checkpoint =
             resolve_checkpoint(resume).with_context(|| format!("--resume {}", resume.display()))?;
         let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
-        let mut experiment = Experiment::from_file(&checkpoint.join(CONFIG_FILE))?;
+        let mut experiment = Experiment::from_file(&checkpoint.join(CONFIG_FILE), registry)?;
         let trainer =
             Learner::load(&checkpoint).with_context(|| format!("--resume {}", resume.display()))?;
         // checkpoints/iter-N -> the run directory two levels up
@@ -184,7 +185,7 @@ fn plan(args: &TrainArgs) -> Result<Plan> {
             threads,
         });
     }
-    let mut experiment = args.scene.experiment()?;
+    let mut experiment = args.scene.experiment(registry)?;
     if let Some(envs) = args.envs {
         experiment.train.envs = envs as usize;
     }
@@ -276,13 +277,13 @@ fn sink_for_env(sink: &RerunSink, env: usize, first: bool) -> RerunSink {
 }
 
 /// `quadwalk train`.
-pub fn train(args: &TrainArgs) -> Result<()> {
+pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
     let Plan {
         experiment,
         run_dir,
         mut trainer,
         threads,
-    } = plan(args)?;
+    } = plan(registry, args)?;
     let total = experiment.total_iterations();
     let start_iteration = trainer.iteration();
     if start_iteration >= total {
@@ -314,8 +315,16 @@ pub fn train(args: &TrainArgs) -> Result<()> {
     }
 
     let model = args.scene.robot()?;
-    let build_env =
-        |terrain| TaskEnv::new(terrain, &model, &experiment, threads, interrupted.clone());
+    let build_env = |terrain| {
+        TaskEnv::new(
+            registry,
+            terrain,
+            &model,
+            &experiment,
+            threads,
+            interrupted.clone(),
+        )
+    };
     let mut stage = experiment.terrain_at(start_iteration).0;
     let mut env = build_env(experiment.terrain_at(start_iteration).1)?;
     let sink = args.rerun.sink(RerunSink::Spawn);

@@ -328,7 +328,9 @@ pub enum SpecError {
         known: String,
     },
     /// No plugin has this name.
-    #[error("terrain spec {input:?}: unknown terrain {name:?} (known terrains: {known})")]
+    #[error(
+        "terrain spec {input:?}: unknown terrain {name:?} (known terrains: {known}); a terrain plugin from another crate is registered in the binary that runs it (quadwalk_cli::App::new().add_terrain(...), or Registry::register)"
+    )]
     UnknownPlugin {
         /// the input
         input: String,

@@ -247,6 +247,29 @@ fn bad_input_gives_one_line_errors_and_no_panic() {
 }
 
 #[test]
+fn a_terrain_whose_plugin_is_not_registered_is_named_with_how_to_register_it() {
+    // An experiment file and a curriculum written for a binary with more plugins.
+    let config = scratch_file("pontoon.toml", "[terrain]\nspec = \"pontoon:3cm\"\n");
+    let stderr = failure(&["stand", "--config", config.to_str().unwrap()], 1);
+    let curriculum = scratch_file(
+        "pontoon-stages.toml",
+        "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n[[curriculum]]\nterrain = \"pontoon:3cm\"\niterations = 2\n",
+    );
+    let stages = failure(&["train", "--config", curriculum.to_str().unwrap()], 1);
+    for (stderr, file) in [(stderr, "pontoon.toml"), (stages, "pontoon-stages.toml")] {
+        for expected in [
+            file,
+            "unknown terrain \"pontoon\"",
+            "known terrains: rigid, elastic, varying",
+            "App::new().add_terrain",
+        ] {
+            assert!(stderr.contains(expected), "{stderr:?} lacks {expected:?}");
+        }
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr:?}");
+    }
+}
+
+#[test]
 fn malformed_urdf_is_refused_with_its_path() {
     let broken = scratch_file("broken.urdf", "<robot name='x'><link name='a'>");
     let stderr = failure(&["stand", "--robot", broken.to_str().unwrap()], 1);

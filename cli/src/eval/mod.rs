@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use robot::task::{Task, TaskConfig};
 use robot::{RobotModel, WorldConfig};
 use serde::{Deserialize, Serialize};
-use terrain_plugins::TerrainSpec;
+use terrain_plugins::{Registry, TerrainSpec};
 
 use crate::commands::{SceneArgs, make_world};
 use crate::policy::Policy;
@@ -107,7 +107,8 @@ pub struct EvalReport {
 }
 
 /// One episode's setting, shared by every worker.
-struct Scene {
+struct Scene<'a> {
+    registry: &'a Registry,
     spec: TerrainSpec,
     model: Arc<RobotModel>,
     task: TaskConfig,
@@ -123,6 +124,7 @@ fn phase_secs() -> f64 {
 /// actions of `quadwalk rollout --seed SEED`.
 fn run_episode(policy: &mut Policy, scene: &Scene, seed: u64) -> Result<EpisodeRecord> {
     let world = make_world(
+        scene.registry,
         &scene.spec,
         scene.model.clone(),
         seed,
@@ -191,17 +193,18 @@ fn default_out_dir(policy: &str, spec: &str, seed: u64) -> PathBuf {
 }
 
 /// `quadwalk eval`.
-pub fn eval(args: &EvalArgs) -> Result<()> {
+pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
     if !args.compare.is_empty() {
         return compare::compare(&args.compare, args.out.as_deref(), args.json);
     }
-    let experiment = args.scene.experiment()?;
+    let experiment = args.scene.experiment(registry)?;
     let (spec, mut task, mut physics) = (experiment.terrain, experiment.task, experiment.physics);
     let sample = |seed: u64| args.stochastic.then_some(seed);
-    let policy = Policy::from_arg(&args.policy, sample(args.seed))?;
+    let policy = Policy::from_arg(registry, &args.policy, sample(args.seed))?;
     policy.fit_scene(&mut task, &mut physics, args.scene.config_path())?;
     task.max_phases = args.phases as usize;
     let scene = Scene {
+        registry,
         spec: spec.clone(),
         model: args.scene.robot()?,
         task,
@@ -234,13 +237,13 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
             .map_init(
                 // one mean-action policy per worker; a sampling policy is
                 // loaded per episode, its generator seeded by the episode
-                || (!args.stochastic).then(|| Policy::from_arg(&args.policy, None)),
+                || (!args.stochastic).then(|| Policy::from_arg(registry, &args.policy, None)),
                 |shared, &seed| {
                     let mut own;
                     let policy = match shared {
                         Some(loaded) => loaded.as_mut().map_err(|e| anyhow!("{e:#}"))?,
                         None => {
-                            own = Policy::from_arg(&args.policy, sample(seed))?;
+                            own = Policy::from_arg(registry, &args.policy, sample(seed))?;
                             &mut own
                         }
                     };

@@ -153,6 +153,7 @@ pub fn terrain_show(
             "tiles": tiles,
             "extent_m": { "min": e.min_m, "max": e.max_m },
             "regions": regions,
+            "details": terrain.details(),
         });
         out!("{out}");
         return Ok(());
@@ -195,6 +196,9 @@ pub fn terrain_show(
             springs,
             r.expected_sink_m * 100.0
         );
+    }
+    for line in terrain.details() {
+        out!("{line}");
     }
     Ok(())
 }

@@ -1,6 +1,8 @@
 //! `elastic:<depth>`: flat elastic terrain, the paper's model. 20 cm tiles,
 //! each on a vertical prismatic joint with a spring whose stiffness makes the
 //! standing robot sink `depth` (see [`crate::tiles`] for the derivation).
+//! `elastic:2..5cm` gives each tile its own depth, drawn uniformly from the
+//! range with the world's seed (per-tile domain randomisation).
 
 use crate::spec::{ParamDecl, ParamKind, Surface, TerrainSpec};
 use crate::tiles::{RegionLayout, TileParams, TiledTerrain, tile_param_decls};
@@ -21,21 +23,20 @@ impl TerrainPlugin for ElasticPlugin {
     fn params(&self) -> Vec<ParamDecl> {
         let mut params = vec![ParamDecl::required(
             "depth",
-            ParamKind::Length,
-            "mean sink of the four loaded tiles under the standing robot",
+            ParamKind::Depth,
+            "mean sink of the four loaded tiles under the standing robot; a range a..b draws each tile's own",
         )];
         params.extend(tile_param_decls());
         params
     }
 
     fn validate(&self, spec: &TerrainSpec) -> Result<(), String> {
-        TileParams::from_spec(spec).validate([spec.length_m("depth")])
+        TileParams::from_spec(spec).validate([spec.depth_range_m("depth").1])
     }
 
     fn create(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {
-        let layout = RegionLayout::Uniform(Surface::Elastic {
-            depth_m: spec.length_m("depth"),
-        });
+        let (min_depth_m, max_depth_m) = spec.depth_range_m("depth");
+        let layout = RegionLayout::Uniform(Surface::from_depth_range(min_depth_m, max_depth_m));
         Box::new(TiledTerrain::new(
             spec.clone(),
             TileParams::from_spec(spec),

@@ -18,6 +18,7 @@
 pub mod elastic;
 pub mod registry;
 pub mod rigid;
+pub mod soil;
 pub mod spec;
 pub mod tiles;
 pub mod units;
@@ -166,6 +167,12 @@ pub trait Terrain: Send {
     /// metres; `None` for terrains without tiles.
     fn tile_geometry_m(&self) -> Option<(f64, f64)> {
         None
+    }
+    /// Lines `quadwalk terrain show` prints after the regions: what else a
+    /// user should know about this terrain's model (e.g. a load-sink
+    /// curve). Default: none.
+    fn details(&self) -> Vec<String> {
+        Vec::new()
     }
 }
 

@@ -53,13 +53,15 @@ impl Registry {
         }
     }
 
-    /// A registry with the built-in plugins: `rigid`, `elastic`, `varying`.
+    /// A registry with the built-in plugins: `rigid`, `elastic`, `varying`,
+    /// `soil`.
     pub fn builtin() -> Self {
         let mut registry = Self::empty();
         for plugin in [
             Box::new(crate::rigid::RigidPlugin) as Box<dyn TerrainPlugin>,
             Box::new(crate::elastic::ElasticPlugin),
             Box::new(crate::varying::VaryingPlugin),
+            Box::new(crate::soil::SoilPlugin),
         ] {
             registry
                 .register(plugin)

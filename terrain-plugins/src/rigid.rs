@@ -1,8 +1,9 @@
-//! `rigid`: flat rigid ground, the plane z = 0.
+//! `rigid`: flat rigid ground, the plane z = 0 (`rigid:friction=0.1` for a
+//! slippery one).
 
 use rapier3d::prelude::*;
 
-use crate::spec::{ParamDecl, TerrainSpec};
+use crate::spec::{ParamDecl, ParamKind, ParamValue, TerrainSpec};
 use crate::tiles::GROUND_FRICTION;
 use crate::{
     BuildContext, Rect, Region, Terrain, TerrainPlugin, TileState, terrain_collision_groups,
@@ -25,15 +26,21 @@ impl TerrainPlugin for RigidPlugin {
     }
 
     fn params(&self) -> Vec<ParamDecl> {
-        Vec::new()
+        vec![ParamDecl::optional(
+            "friction",
+            ParamKind::Number,
+            ParamValue::Number(f64::from(GROUND_FRICTION)),
+            "friction coefficient of the ground (the contact's, min with the robot's 1.0), default 1",
+        )]
     }
 
     fn create(&self, spec: &TerrainSpec, _ctx: &BuildContext) -> Box<dyn Terrain> {
         Box::new(RigidGround {
             spec: spec.clone(),
+            friction: spec.number("friction"),
             regions: vec![Region {
                 index: 0,
-                label: "rigid".to_string(),
+                label: spec.to_string(),
                 x_range_m: (-HALF_EXTENT_M, HALF_EXTENT_M),
                 stiffness_n_per_m: None,
                 damping_n_s_per_m: None,
@@ -46,6 +53,7 @@ impl TerrainPlugin for RigidPlugin {
 /// Flat rigid ground.
 pub struct RigidGround {
     spec: TerrainSpec,
+    friction: f64,
     regions: Vec<Region>,
 }
 
@@ -57,7 +65,8 @@ impl Terrain for RigidGround {
     fn build(&mut self, world: &mut PhysicsWorld) {
         let ground = world.insert_body(RigidBodyBuilder::fixed());
         let plane = ColliderBuilder::halfspace(rapier3d::na::Unit::new_unchecked(Vector::Z))
-            .friction(GROUND_FRICTION)
+            .friction(self.friction as f32)
+            .friction_combine_rule(CoefficientCombineRule::Min)
             .collision_groups(terrain_collision_groups());
         world.insert_collider(plane, Some(ground));
     }

@@ -26,6 +26,9 @@ pub enum ParamKind {
     Mass,
     /// A dimensionless number (`0.5`); must be >= 0.
     Number,
+    /// A sinking depth (`5cm`), or a range of them (`2..5cm`, `2cm..5cm`)
+    /// from which each tile draws its own; stored in metres, > 0.
+    Depth,
     /// A comma-separated list of surfaces, each a sinking depth or `rigid`
     /// (`2,3,4,5cm,rigid`). A bare number takes the next unit written after
     /// it in the list, so `2,3cm` is 2 cm and 3 cm.
@@ -38,7 +41,10 @@ impl ParamKind {
             Self::Length => "a length such as 5cm, 0.05m or 50mm",
             Self::Mass => "a mass such as 25kg",
             Self::Number => "a number such as 0.5",
-            Self::Surfaces => "a list of depths and `rigid`, such as 2,3,4,5cm,rigid",
+            Self::Depth => "a depth such as 5cm, or a range such as 2..5cm",
+            Self::Surfaces => {
+                "a list of depths, depth ranges and `rigid`, such as 2,3,4,5cm,rigid or 2..5cm,rigid"
+            }
         }
     }
 }
@@ -53,6 +59,42 @@ pub enum Surface {
         /// nominal sinking depth, metres
         depth_m: f64,
     },
+    /// Elastic tiles, each with its own depth drawn uniformly from
+    /// [min, max] with the world's seed (per-tile domain randomisation).
+    ElasticRange {
+        /// smallest depth, metres
+        min_depth_m: f64,
+        /// largest depth, metres
+        max_depth_m: f64,
+    },
+    /// Tiles of soil that yield and stay down (see [`crate::soil`]).
+    Soil(crate::soil::SoilParams),
+}
+
+impl Surface {
+    /// The surface a depth parameter describes: one depth or a range.
+    pub fn from_depth_range(min_depth_m: f64, max_depth_m: f64) -> Self {
+        if min_depth_m == max_depth_m {
+            Self::Elastic {
+                depth_m: min_depth_m,
+            }
+        } else {
+            Self::ElasticRange {
+                min_depth_m,
+                max_depth_m,
+            }
+        }
+    }
+
+    /// The deepest nominal sink of this surface, metres (0 for rigid).
+    pub fn max_depth_m(&self) -> f64 {
+        match *self {
+            Self::Rigid => 0.0,
+            Self::Elastic { depth_m } => depth_m,
+            Self::ElasticRange { max_depth_m, .. } => max_depth_m,
+            Self::Soil(soil) => soil.depth_m,
+        }
+    }
 }
 
 impl fmt::Display for Surface {
@@ -60,6 +102,16 @@ impl fmt::Display for Surface {
         match self {
             Self::Rigid => f.write_str("rigid"),
             Self::Elastic { depth_m } => f.write_str(&format_length(*depth_m)),
+            Self::ElasticRange {
+                min_depth_m,
+                max_depth_m,
+            } => write!(
+                f,
+                "{}..{}",
+                format_length(*min_depth_m),
+                format_length(*max_depth_m)
+            ),
+            Self::Soil(soil) => write!(f, "{soil}"),
         }
     }
 }
@@ -73,6 +125,13 @@ pub enum ParamValue {
     Mass(f64),
     /// dimensionless
     Number(f64),
+    /// a depth or a range of depths, metres (min == max: one depth)
+    Depth {
+        /// smallest depth, metres
+        min_m: f64,
+        /// largest depth, metres
+        max_m: f64,
+    },
     /// a list of surfaces
     Surfaces(Vec<Surface>),
 }
@@ -83,6 +142,9 @@ impl fmt::Display for ParamValue {
             Self::Length(v) => f.write_str(&format_length(*v)),
             Self::Mass(v) => f.write_str(&format_mass(*v)),
             Self::Number(v) => write!(f, "{v}"),
+            Self::Depth { min_m, max_m } => {
+                write!(f, "{}", Surface::from_depth_range(*min_m, *max_m))
+            }
             Self::Surfaces(list) => {
                 let items: Vec<String> = list.iter().map(Surface::to_string).collect();
                 f.write_str(&items.join(","))
@@ -155,6 +217,9 @@ impl ParamDecl {
                 }
                 Ok(ParamValue::Number(v))
             }
+            ParamKind::Depth => {
+                parse_depth_range(text).map(|(min_m, max_m)| ParamValue::Depth { min_m, max_m })
+            }
             ParamKind::Surfaces => parse_surfaces(text).map(ParamValue::Surfaces),
         }
     }
@@ -163,6 +228,35 @@ impl ParamDecl {
     pub fn expects(&self) -> &'static str {
         self.kind.describe()
     }
+}
+
+/// Parses `5cm` (one depth) or `2..5cm` / `2cm..5cm` (a range; a bare lower
+/// bound takes the upper bound's unit) into (min, max) metres.
+fn parse_depth_range(text: &str) -> Result<(f64, f64), String> {
+    let Some((lower, upper)) = text.split_once("..") else {
+        let depth_m = parse_length_m(text)?;
+        return if depth_m > 0.0 {
+            Ok((depth_m, depth_m))
+        } else {
+            Err(format!("depth must be greater than zero, got {text:?}"))
+        };
+    };
+    let max_m = parse_length_m(upper.trim())?;
+    let (number, unit) = split_number_unit(lower);
+    let min_m = if unit.is_empty() {
+        let (_, upper_unit) = split_number_unit(upper);
+        let unit = LengthUnit::parse(upper_unit)
+            .ok_or_else(|| format!("{text:?}: the range's upper bound has no known unit"))?;
+        unit.to_m(parse_finite(number)?)
+    } else {
+        parse_length_m(lower.trim())?
+    };
+    if min_m <= 0.0 || min_m >= max_m {
+        return Err(format!(
+            "range {text:?} must run from a depth greater than zero to a larger one"
+        ));
+    }
+    Ok((min_m, max_m))
 }
 
 fn parse_surfaces(text: &str) -> Result<Vec<Surface>, String> {
@@ -179,6 +273,20 @@ fn parse_surfaces(text: &str) -> Result<Vec<Surface>, String> {
         }
         if item.eq_ignore_ascii_case("rigid") {
             out[i] = Some(Surface::Rigid);
+            continue;
+        }
+        if item.contains("..") {
+            let (min_m, max_m) =
+                parse_depth_range(item).map_err(|e| format!("item {item:?}: {e}"))?;
+            let (lower, _) = item.split_once("..").unwrap_or_default();
+            let (_, unit) = split_number_unit(lower);
+            let unit = if unit.is_empty() {
+                split_number_unit(item.rsplit_once("..").unwrap_or_default().1).1
+            } else {
+                unit
+            };
+            pending_unit = LengthUnit::parse(unit);
+            out[i] = Some(Surface::from_depth_range(min_m, max_m));
             continue;
         }
         let (number, unit) = split_number_unit(item);
@@ -263,6 +371,18 @@ impl TerrainSpec {
             Some(ParamValue::Number(v)) => *v,
             other => panic!(
                 "plugin {} has no number parameter {name} (found {other:?})",
+                self.plugin
+            ),
+        }
+    }
+
+    /// A depth parameter as (min, max) metres, equal for one depth (see
+    /// [`Self::length_m`] on panics).
+    pub fn depth_range_m(&self, name: &str) -> (f64, f64) {
+        match self.get(name) {
+            Some(ParamValue::Depth { min_m, max_m }) => (*min_m, *max_m),
+            other => panic!(
+                "plugin {} has no depth parameter {name} (found {other:?})",
                 self.plugin
             ),
         }

@@ -14,7 +14,7 @@ fn parse(s: &str) -> Result<TerrainSpec, SpecError> {
 fn builtin_specs_parse_to_si_values() {
     let spec = parse("elastic:5cm").unwrap();
     assert_eq!(spec.plugin(), "elastic");
-    assert_eq!(spec.length_m("depth"), 0.05);
+    assert_eq!(spec.depth_range_m("depth"), (0.05, 0.05));
     assert_eq!(spec.length_m("tile"), 0.2);
     assert_eq!(parse("elastic:50mm").unwrap(), spec);
     assert_eq!(parse("elastic:0.05m").unwrap(), spec);
@@ -49,6 +49,19 @@ fn display_is_canonical_and_round_trips() {
         (
             "elastic:5cm:tile=20cm:travel=12cm",
             "elastic:5cm:travel=12cm",
+        ),
+        ("elastic:2..5cm", "elastic:2cm..5cm"),
+        (
+            "elastic:20mm..0.05m:friction=0.5",
+            "elastic:2cm..5cm:friction=0.5",
+        ),
+        ("varying:2m:2..5cm,rigid", "varying:2m:2cm..5cm,rigid"),
+        ("rigid:friction=1", "rigid"),
+        ("rigid:friction=0.1", "rigid:friction=0.1"),
+        ("soil:4cm", "soil:4cm"),
+        (
+            "soil:4cm:elastic=5mm:yield=0.3:recovery=2",
+            "soil:4cm:elastic=5mm:yield=0.3:recovery=2",
         ),
     ] {
         let spec = parse(input).unwrap();
@@ -85,7 +98,7 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ("", "empty"),
         (
             "sand:5cm",
-            "unknown terrain \"sand\" (known terrains: rigid, elastic, varying)",
+            "unknown terrain \"sand\" (known terrains: rigid, elastic, varying, soil)",
         ),
         ("elastic", "takes 1 positional argument(s), got 0"),
         ("elastic:5cm:3cm", "takes 1 positional argument(s), got 2"),
@@ -107,6 +120,19 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ("elastic:5cm:damping=-1", "must not be negative"),
         ("elastic:5cm:gap=30cm", "gap 30cm must be smaller"),
         ("varying:5cm:2cm", "shorter than one tile"),
+        ("elastic:5..2cm", "to a larger one"),
+        ("elastic:0..2cm", "to a larger one"),
+        ("elastic:2..5", "no unit"),
+        ("elastic:2..30cm", "beyond the tile travel"),
+        ("varying:2m:2cm,3..1cm", "to a larger one"),
+        ("rigid:friction=-0.1", "must not be negative"),
+        ("elastic:5cm:friction=abc", "not a number"),
+        ("soil:4cm:elastic=4cm", "must be less than depth"),
+        ("soil:4cm:yield=1", "strictly between 0 and 1"),
+        ("soil:4cm:yield=0", "strictly between 0 and 1"),
+        ("soil:20cm", "beyond the tile travel"),
+        ("soil:4cm:recovery=-1", "must not be negative"),
+        ("soil", "takes 1 positional argument"),
     ];
     for (input, expected) in cases {
         let err = parse(input).expect_err(input).to_string();
@@ -362,4 +388,200 @@ fn varying_regions_follow_the_seed_and_start_with_the_first_surface() {
         .filter(|t| regions[t.region].stiffness_n_per_m.is_none())
         .count();
     assert_eq!(terrain.tile_count(), 100 * 15 - rigid_cells);
+}
+
+/// Presses the tile centred on the origin with `load_n` for `steps`, each
+/// step with the terrain's hooks; returns its sink.
+fn press(
+    world: &mut PhysicsWorld,
+    terrain: &mut Box<dyn Terrain>,
+    load_n: f64,
+    steps: usize,
+) -> f64 {
+    let handle = centre_tile(world);
+    world.bodies[handle].reset_forces(true);
+    world.bodies[handle].add_force(Vector::new(0.0, 0.0, -load_n as f32), true);
+    for _ in 0..steps {
+        step(world, terrain);
+    }
+    -terrain.surface_height_m(world, 0.0, 0.0)
+}
+
+/// A quarter of the standing robot's weight, N.
+const STANDING_LOAD_N: f64 = 25.567 * 9.81 / 4.0;
+
+fn soil_model(spec: &str) -> crate::soil::SoilModel {
+    crate::soil::SoilParams::from_spec(&parse(spec).unwrap()).model(&BuildContext::default())
+}
+
+#[test]
+fn soil_follows_its_load_sink_curve_within_five_percent() {
+    let spec = "soil:4cm:elastic=1cm:yield=0.5";
+    let model = soil_model(spec);
+    let (mut world, mut terrain) = world_with(spec, 0);
+    // Quasi-static loading of a fresh tile: 0.15, 0.3, ... 1.5 x the standing load.
+    for k in 1..=10 {
+        let load_n = STANDING_LOAD_N * 0.15 * k as f64;
+        let sink_m = press(&mut world, &mut terrain, load_n, 360);
+        let expected_m = model.loading_sink_m(load_n);
+        assert!(
+            (sink_m - expected_m).abs() <= 0.05 * expected_m,
+            "load {load_n:.1} N: sink {sink_m} m, curve {expected_m} m"
+        );
+    }
+    // The standing load itself sinks a fresh tile the named depth.
+    assert!((model.loading_sink_m(STANDING_LOAD_N) - 0.04).abs() < 1e-12);
+}
+
+#[test]
+fn a_soil_tile_loaded_and_unloaded_stays_down_by_its_permanent_sink() {
+    let spec = "soil:4cm";
+    let model = soil_model(spec);
+    let (mut world, mut terrain) = world_with(spec, 0);
+    let loaded_m = press(&mut world, &mut terrain, STANDING_LOAD_N, 480);
+    assert!((loaded_m - 0.04).abs() < 0.002, "loaded sink {loaded_m}");
+    let unloaded_m = press(&mut world, &mut terrain, 0.0, 480);
+    let permanent_m = model.permanent_sink_m(STANDING_LOAD_N);
+    assert!((permanent_m - 0.03).abs() < 1e-12);
+    assert!(
+        (unloaded_m - permanent_m).abs() <= 0.05 * permanent_m,
+        "unloaded sink {unloaded_m}, model {permanent_m}"
+    );
+    // It stays there asleep, and reloading to the same load only takes the
+    // elastic part back.
+    let later_m = press(&mut world, &mut terrain, 0.0, 480);
+    assert!(
+        (later_m - unloaded_m).abs() < 2e-4,
+        "{later_m} vs {unloaded_m}"
+    );
+    assert!(world.bodies[centre_tile(&world)].is_sleeping());
+    let reloaded_m = press(&mut world, &mut terrain, STANDING_LOAD_N, 480);
+    assert!((reloaded_m - 0.04).abs() < 0.002, "reloaded {reloaded_m}");
+    // Between episodes the tile is put back fresh.
+    press(&mut world, &mut terrain, 0.0, 1);
+    terrain.reset(&mut world);
+    assert!(terrain.surface_height_m(&world, 0.0, 0.0).abs() < 1e-6);
+    let fresh_m = press(&mut world, &mut terrain, 0.5 * STANDING_LOAD_N, 480);
+    assert!(
+        (fresh_m - model.loading_sink_m(0.5 * STANDING_LOAD_N)).abs() < 5e-4,
+        "after reset {fresh_m}"
+    );
+}
+
+#[test]
+fn a_soil_tile_with_recovery_rises_back_with_its_time_constant() {
+    let (mut world, mut terrain) = world_with("soil:4cm:recovery=1", 0);
+    press(&mut world, &mut terrain, STANDING_LOAD_N, 480);
+    let released_m = press(&mut world, &mut terrain, 0.0, 24);
+    assert!(released_m > 0.02, "released {released_m}");
+    // After 3 more seconds, e^-3 of the permanent sink is left (give or take
+    // the tile's own lag behind its spring's rest point).
+    let later_m = press(&mut world, &mut terrain, 0.0, 720);
+    assert!(later_m < 0.003, "after 3 s: {later_m}");
+    let rested_m = press(&mut world, &mut terrain, 0.0, 1440);
+    assert!(rested_m < 2e-4, "after 9 s: {rested_m}");
+}
+
+#[test]
+fn per_tile_depths_cover_their_range_reproducibly_and_each_tile_sinks_its_own() {
+    use crate::tiles::{RegionLayout, TileParams, TiledTerrain};
+    let field = |seed: u64| {
+        let spec = parse("elastic:2..5cm").unwrap();
+        let ctx = BuildContext {
+            seed,
+            ..BuildContext::default()
+        };
+        let layout = RegionLayout::Uniform(Surface::from_depth_range(0.02, 0.05));
+        TiledTerrain::new(spec.clone(), TileParams::from_spec(&spec), layout, &ctx)
+    };
+    let depths = |t: &TiledTerrain| -> Vec<f64> {
+        t.cell_springs()
+            .iter()
+            .flatten()
+            .map(|s| s.depth_m)
+            .collect()
+    };
+    let a = depths(&field(3));
+    assert_eq!(a.len(), 1500);
+    let (min, max) = a
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), &d| (lo.min(d), hi.max(d)));
+    assert!(
+        (0.02..0.0205).contains(&min) && (0.0495..=0.05).contains(&max),
+        "{min}..{max}"
+    );
+    let mean = a.iter().sum::<f64>() / a.len() as f64;
+    assert!((mean - 0.035).abs() < 0.001, "mean {mean}");
+    // a quarter of the draws in each quarter of the range, give or take
+    for q in 0..4 {
+        let lo = 0.02 + 0.0075 * q as f64;
+        let n = a.iter().filter(|&&d| d >= lo && d < lo + 0.0075).count();
+        assert!((300..=450).contains(&n), "quarter {q}: {n}");
+    }
+    assert_eq!(depths(&field(3)), a, "same seed, same depths");
+    assert_ne!(depths(&field(4)), a, "another seed, other depths");
+    for s in field(3).cell_springs().iter().flatten() {
+        assert!((s.stiffness_n_per_m - STANDING_LOAD_N / s.depth_m).abs() < 1e-6);
+    }
+    // Built from the registry with seed 3, the centre tile sinks its own depth.
+    let (mut world, mut terrain) = world_with("elastic:2..5cm", 3);
+    let built = field(3);
+    // the cell at the origin: its column from the field's first centre, the middle of 15 rows
+    let first_x_m = built.extent().min_m[0] + 0.1;
+    let (ix, iy) = ((-first_x_m / 0.2).round() as usize, 7);
+    let own_m = built.cell_springs()[ix * 15 + iy].unwrap().depth_m;
+    let sink_m = press(&mut world, &mut terrain, STANDING_LOAD_N, 480);
+    assert!(
+        (sink_m - own_m).abs() < 0.002,
+        "sink {sink_m}, drawn {own_m}"
+    );
+}
+
+/// A 2 kg box on the ground at the origin, pushed along x by `push` x its
+/// weight for 0.3 s (so that on tiles it stays on the tile it sank): how
+/// far it moved, m.
+fn box_slide_m(spec: &str, push: f64) -> f64 {
+    let (mut world, mut terrain) = world_with(spec, 0);
+    let mass_kg = 2.0;
+    let body = world.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 0.0, 0.05))
+            .lock_rotations(),
+    );
+    let cube = ColliderBuilder::cuboid(0.05, 0.05, 0.05)
+        .mass(mass_kg)
+        .friction(1.0)
+        .collision_groups(robot_collision_groups());
+    world.insert_collider(cube, Some(body));
+    for _ in 0..240 {
+        step(&mut world, &mut terrain);
+    }
+    let start = world.bodies[body].translation().x;
+    let push_n = push * f64::from(mass_kg) * 9.81;
+    world.bodies[body].add_force(Vector::new(push_n as f32, 0.0, 0.0), true);
+    for _ in 0..72 {
+        step(&mut world, &mut terrain);
+    }
+    f64::from(world.bodies[body].translation().x - start)
+}
+
+#[test]
+fn friction_is_the_contacts_coefficient_on_rigid_ground_and_tiles() {
+    // (push - mu) g t^2 / 2 for t = 0.3 s
+    let expected_m = 0.5 * 0.1 * 9.81 * 0.09;
+    for spec in ["rigid:friction=0.3", "elastic:5cm:friction=0.3"] {
+        let held = box_slide_m(spec, 0.2);
+        let slid = box_slide_m(spec, 0.4);
+        assert!(
+            held.abs() < 1e-3,
+            "{spec}: pushed at 0.2 m g it moved {held} m"
+        );
+        assert!(
+            (slid - expected_m).abs() < 0.25 * expected_m,
+            "{spec}: at 0.4 m g it slid {slid} m, expected {expected_m} m"
+        );
+    }
+    // the default (1.0) holds the same push
+    assert!(box_slide_m("rigid", 0.4).abs() < 1e-3);
+    assert!(box_slide_m("elastic:5cm", 0.4).abs() < 1e-3);
 }

@@ -31,15 +31,23 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rapier3d::prelude::*;
 
+use crate::soil::SoilModel;
 use crate::spec::{ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
 use crate::units::format_length;
 use crate::{BuildContext, Rect, Region, Terrain, TileState, terrain_collision_groups};
 
 /// Thickness of a tile, metres.
+///
+/// Friction: every terrain collider combines its friction with the robot's
+/// by the minimum (rapier's `CoefficientCombineRule::Min`), so a terrain's
+/// `friction=<mu>` is the contact's coefficient (the robot's feet have 1.0).
 pub const TILE_THICKNESS_M: f64 = 0.05;
 /// Friction coefficient of tile and ground surfaces (the Laikago model's
 /// lateral friction is 1.0 too).
 pub const GROUND_FRICTION: f32 = 1.0;
+
+/// Stream of the per-tile depth draw (mixed into the build seed).
+const TILE_DEPTH_STREAM: u64 = 0x7469_6c65_2d64_6570;
 
 /// The optional parameters every tiled terrain takes, with their defaults.
 pub fn tile_param_decls() -> Vec<ParamDecl> {
@@ -77,6 +85,12 @@ pub fn tile_param_decls() -> Vec<ParamDecl> {
             "mass of one tile, default 0.5kg",
         ),
         ParamDecl::optional(
+            "friction",
+            Number,
+            V::Number(f64::from(GROUND_FRICTION)),
+            "friction coefficient of the tiles and the ground (the contact's, min with the robot's 1.0), default 1",
+        ),
+        ParamDecl::optional(
             "length",
             Length,
             V::Length(20.0),
@@ -110,6 +124,8 @@ pub struct TileParams {
     pub damping_ratio: f64,
     /// mass of one tile, kg
     pub tile_mass_kg: f64,
+    /// friction coefficient of the tiles and the ground
+    pub friction: f64,
     /// extent along x, m
     pub length_m: f64,
     /// extent behind x = 0, m
@@ -127,6 +143,7 @@ impl TileParams {
             travel_m: spec.length_m("travel"),
             damping_ratio: spec.number("damping"),
             tile_mass_kg: spec.mass_kg("tile_mass"),
+            friction: spec.number("friction"),
             length_m: spec.length_m("length"),
             back_m: spec.length_m("back"),
             width_m: spec.length_m("width"),
@@ -201,10 +218,46 @@ pub enum RegionLayout {
     },
 }
 
+/// How the tiles of one region respond to load.
 #[derive(Debug, Clone, Copy)]
-struct RegionSprings {
-    stiffness_n_per_m: f64,
-    damping_n_s_per_m: f64,
+enum RegionModel {
+    /// no tiles: a solid block
+    Rigid,
+    /// every tile on the same spring
+    Elastic {
+        stiffness_n_per_m: f64,
+        damping_n_s_per_m: f64,
+    },
+    /// each tile its own depth, drawn in [min, max]
+    ElasticRange { min_depth_m: f64, max_depth_m: f64 },
+    /// elasto-plastic tiles
+    Soil {
+        model: SoilModel,
+        damping_n_s_per_m: f64,
+    },
+}
+
+/// One tile's spring, fixed when the terrain is laid out.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TileSpring {
+    /// the depth the tile sinks under a quarter of the standing robot, m
+    pub depth_m: f64,
+    /// N/m
+    pub stiffness_n_per_m: f64,
+    /// N s/m
+    pub damping_n_s_per_m: f64,
+}
+
+/// A built tile.
+#[derive(Debug, Clone, Copy)]
+struct Tile {
+    body: RigidBodyHandle,
+    joint: ImpulseJointHandle,
+    spring: TileSpring,
+    /// the spring's target above rest that carries the tile's own weight, m
+    preload_m: f64,
+    /// soil tiles: the model and the permanent sink, m
+    soil: Option<(SoilModel, f64)>,
 }
 
 /// A field of tiles on springs, grouped into regions along x.
@@ -213,14 +266,18 @@ pub struct TiledTerrain {
     params: TileParams,
     ctx: BuildContext,
     regions: Vec<Region>,
-    springs: Vec<Option<RegionSprings>>,
+    models: Vec<RegionModel>,
+    /// one entry per cell, row-major by column: `None` for rigid cells
+    cell_springs: Vec<Option<TileSpring>>,
     /// region index of each column
     column_region: Vec<usize>,
     columns: usize,
     rows: usize,
     first_center_m: [f64; 2],
     /// one entry per cell, row-major by column: `None` for rigid cells
-    tiles: Vec<Option<RigidBodyHandle>>,
+    tiles: Vec<Option<Tile>>,
+    /// indices in `tiles` of the soil tiles
+    soil_tiles: Vec<usize>,
     built: bool,
     /// the world has taken its first step (see [`Terrain::after_step`])
     stepped: bool,
@@ -270,23 +327,57 @@ impl TiledTerrain {
 
         let half = pitch / 2.0;
         let mut regions = Vec::new();
-        let mut springs = Vec::new();
+        let mut models = Vec::new();
         for (index, surface) in region_surfaces.iter().enumerate() {
             let first = column_region.iter().position(|&r| r == index).unwrap_or(0);
             let last = column_region.iter().rposition(|&r| r == index).unwrap_or(0);
             let x_range_m = (column_x(first) - half, column_x(last) + half);
-            let (label, spring, expected_sink_m) = match *surface {
-                Surface::Rigid => ("rigid".to_string(), None, 0.0),
+            let spring_at = |depth_m: f64| {
+                let k = TileParams::stiffness_n_per_m(depth_m, ctx);
+                (k, params.damping_n_s_per_m(k, ctx))
+            };
+            // What `terrain show` reports: for a range, the springs of its
+            // middle depth.
+            let (label, model, reported, expected_sink_m) = match *surface {
+                Surface::Rigid => ("rigid".to_string(), RegionModel::Rigid, None, 0.0),
                 Surface::Elastic { depth_m } => {
-                    let k = TileParams::stiffness_n_per_m(depth_m, ctx);
-                    let c = params.damping_n_s_per_m(k, ctx);
+                    let (k, c) = spring_at(depth_m);
                     (
-                        format!("elastic:{}", format_length(depth_m)),
-                        Some(RegionSprings {
+                        format!("elastic:{surface}"),
+                        RegionModel::Elastic {
                             stiffness_n_per_m: k,
                             damping_n_s_per_m: c,
-                        }),
+                        },
+                        Some((k, c)),
                         depth_m,
+                    )
+                }
+                Surface::ElasticRange {
+                    min_depth_m,
+                    max_depth_m,
+                } => {
+                    let middle_m = (min_depth_m + max_depth_m) / 2.0;
+                    (
+                        format!("elastic:{surface}"),
+                        RegionModel::ElasticRange {
+                            min_depth_m,
+                            max_depth_m,
+                        },
+                        Some(spring_at(middle_m)),
+                        middle_m,
+                    )
+                }
+                Surface::Soil(soil) => {
+                    let model = soil.model(ctx);
+                    let c = params.damping_n_s_per_m(model.reload_stiffness_n_per_m, ctx);
+                    (
+                        surface.to_string(),
+                        RegionModel::Soil {
+                            model,
+                            damping_n_s_per_m: c,
+                        },
+                        Some((model.reload_stiffness_n_per_m, c)),
+                        soil.depth_m,
                     )
                 }
             };
@@ -294,11 +385,53 @@ impl TiledTerrain {
                 index,
                 label,
                 x_range_m,
-                stiffness_n_per_m: spring.map(|s| s.stiffness_n_per_m),
-                damping_n_s_per_m: spring.map(|s| s.damping_n_s_per_m),
+                stiffness_n_per_m: reported.map(|(k, _)| k),
+                damping_n_s_per_m: reported.map(|(_, c)| c),
                 expected_sink_m,
             });
-            springs.push(spring);
+            models.push(model);
+        }
+
+        // Each cell's spring; a depth range draws one per tile, in cell
+        // order, from the build seed (its own stream, apart from the
+        // region draw).
+        let mut depth_rng = ChaCha8Rng::seed_from_u64(ctx.seed ^ TILE_DEPTH_STREAM);
+        let mut cell_springs = Vec::with_capacity(columns * rows);
+        for &region in &column_region {
+            for _ in 0..rows {
+                let spring = match models[region] {
+                    RegionModel::Rigid => None,
+                    RegionModel::Elastic {
+                        stiffness_n_per_m,
+                        damping_n_s_per_m,
+                    } => Some(TileSpring {
+                        depth_m: regions[region].expected_sink_m,
+                        stiffness_n_per_m,
+                        damping_n_s_per_m,
+                    }),
+                    RegionModel::ElasticRange {
+                        min_depth_m,
+                        max_depth_m,
+                    } => {
+                        let depth_m = depth_rng.random_range(min_depth_m..=max_depth_m);
+                        let k = TileParams::stiffness_n_per_m(depth_m, ctx);
+                        Some(TileSpring {
+                            depth_m,
+                            stiffness_n_per_m: k,
+                            damping_n_s_per_m: params.damping_n_s_per_m(k, ctx),
+                        })
+                    }
+                    RegionModel::Soil {
+                        model,
+                        damping_n_s_per_m,
+                    } => Some(TileSpring {
+                        depth_m: regions[region].expected_sink_m,
+                        stiffness_n_per_m: model.reload_stiffness_n_per_m,
+                        damping_n_s_per_m,
+                    }),
+                };
+                cell_springs.push(spring);
+            }
         }
 
         Self {
@@ -306,12 +439,14 @@ impl TiledTerrain {
             params,
             ctx: ctx.clone(),
             regions,
-            springs,
+            models,
+            cell_springs,
             column_region,
             columns,
             rows,
             first_center_m: [first_x, first_y],
             tiles: Vec::new(),
+            soil_tiles: Vec::new(),
             built: false,
             stepped: false,
         }
@@ -338,6 +473,12 @@ impl TiledTerrain {
         -(self.params.travel_m + TILE_THICKNESS_M)
     }
 
+    /// Each cell's spring (row-major by column, `None` for rigid cells): the
+    /// depths a range drew, for inspection and tests.
+    pub fn cell_springs(&self) -> &[Option<TileSpring>] {
+        &self.cell_springs
+    }
+
     fn tile_sink_m(&self, world: &PhysicsWorld, handle: RigidBodyHandle) -> f64 {
         let rest_center_z = -TILE_THICKNESS_M / 2.0;
         world
@@ -349,6 +490,19 @@ impl TiledTerrain {
     /// Puts tile `index` back at rest (top face at z = 0, no velocity) and
     /// to sleep (between episodes; tested to carry load again after it).
     fn put_to_rest(&self, world: &mut PhysicsWorld, index: usize, handle: RigidBodyHandle) {
+        if let Some(Some(tile)) = self.tiles.get(index)
+            && let Some((_, plastic_m)) = tile.soil
+            && plastic_m > 0.0
+            && let Some(joint) = world.impulse_joints.get_mut(tile.joint, false)
+        {
+            let s = tile.spring;
+            joint.data.set_motor_position(
+                JointAxis::LinX,
+                tile.preload_m as f32,
+                s.stiffness_n_per_m as f32,
+                s.damping_n_s_per_m as f32,
+            );
+        }
         let Some(body) = world.bodies.get_mut(handle) else {
             return;
         };
@@ -391,14 +545,15 @@ impl Terrain for TiledTerrain {
                 0.0,
                 (base_top - 0.5) as f32,
             ))
-            .friction(GROUND_FRICTION)
+            .friction(p.friction as f32)
+            .friction_combine_rule(CoefficientCombineRule::Min)
             .collision_groups(terrain_collision_groups());
         world.insert_collider(floor, Some(base));
 
         // Rigid regions: one solid block per region, top at z = 0.
         let depth_below = p.travel_m + TILE_THICKNESS_M;
-        for (region, spring) in self.regions.iter().zip(&self.springs) {
-            if spring.is_none() {
+        for (region, model) in self.regions.iter().zip(&self.models) {
+            if matches!(model, RegionModel::Rigid) {
                 let (x0, x1) = region.x_range_m;
                 let block = ColliderBuilder::cuboid(
                     ((x1 - x0) / 2.0) as f32,
@@ -410,7 +565,8 @@ impl Terrain for TiledTerrain {
                     0.0,
                     (-depth_below / 2.0) as f32,
                 ))
-                .friction(GROUND_FRICTION)
+                .friction(p.friction as f32)
+                .friction_combine_rule(CoefficientCombineRule::Min)
                 .collision_groups(terrain_collision_groups());
                 world.insert_collider(block, Some(base));
             }
@@ -421,9 +577,12 @@ impl Terrain for TiledTerrain {
         let g = self.ctx.gravity_m_per_s2;
         self.tiles = Vec::with_capacity(self.columns * self.rows);
         for ix in 0..self.columns {
-            let springs = self.springs[self.column_region[ix]];
+            let soil = match self.models[self.column_region[ix]] {
+                RegionModel::Soil { model, .. } => Some((model, 0.0)),
+                _ => None,
+            };
             for iy in 0..self.rows {
-                let Some(s) = springs else {
+                let Some(s) = self.cell_springs[ix * self.rows + iy] else {
                     self.tiles.push(None);
                     continue;
                 };
@@ -437,7 +596,8 @@ impl Terrain for TiledTerrain {
                     (TILE_THICKNESS_M / 2.0) as f32,
                 )
                 .mass(p.tile_mass_kg as f32)
-                .friction(GROUND_FRICTION)
+                .friction(p.friction as f32)
+                .friction_combine_rule(CoefficientCombineRule::Min)
                 .collision_groups(terrain_collision_groups());
                 world.insert_collider(collider, Some(handle));
                 // Spring target above rest so that at q = 0 the spring holds the tile's weight.
@@ -452,8 +612,17 @@ impl Terrain for TiledTerrain {
                         s.stiffness_n_per_m as f32,
                         s.damping_n_s_per_m as f32,
                     );
-                world.impulse_joints.insert(base, handle, joint, false);
-                self.tiles.push(Some(handle));
+                let joint = world.impulse_joints.insert(base, handle, joint, false);
+                if soil.is_some() {
+                    self.soil_tiles.push(self.tiles.len());
+                }
+                self.tiles.push(Some(Tile {
+                    body: handle,
+                    joint,
+                    spring: s,
+                    preload_m,
+                    soil,
+                }));
             }
         }
     }
@@ -472,9 +641,9 @@ impl Terrain for TiledTerrain {
             return;
         }
         self.stepped = true;
-        for handle in self.tiles.iter().flatten() {
-            let sink_m = self.tile_sink_m(world, *handle);
-            let Some(body) = world.bodies.get_mut(*handle) else {
+        for tile in self.tiles.iter().flatten() {
+            let sink_m = self.tile_sink_m(world, tile.body);
+            let Some(body) = world.bodies.get_mut(tile.body) else {
                 continue;
             };
             let at_rest = sink_m.abs() < 1e-5
@@ -491,16 +660,72 @@ impl Terrain for TiledTerrain {
         }
     }
 
-    fn reset(&mut self, world: &mut PhysicsWorld) {
-        for (index, handle) in self.tiles.iter().enumerate() {
-            let Some(handle) = *handle else { continue };
-            let Some(body) = world.bodies.get_mut(handle) else {
+    /// Soil: moves each awake tile's permanent sink (and so its spring's
+    /// rest point) with the sink it has now (see [`crate::soil`]); with
+    /// recovery, a sleeping tile with a permanent sink is woken to rise.
+    fn before_step(&mut self, world: &mut PhysicsWorld, dt_secs: f64) {
+        for &index in &self.soil_tiles {
+            let Some(tile) = self.tiles[index] else {
                 continue;
             };
-            if body.is_sleeping() {
-                continue; // asleep means at rest already
+            let Some((model, plastic_m)) = tile.soil else {
+                continue;
+            };
+            let Some(body) = world.bodies.get(tile.body) else {
+                continue;
+            };
+            let recovering = model.recovery_secs > 0.0 && plastic_m > 0.0;
+            if body.is_sleeping() && !recovering {
+                continue;
             }
-            self.put_to_rest(world, index, handle);
+            let sink_m = self.tile_sink_m(world, tile.body);
+            let advanced_m = model.advance(plastic_m, sink_m, dt_secs);
+            if advanced_m == plastic_m {
+                continue;
+            }
+            let recovered_m = if recovering && advanced_m < 1e-6 {
+                0.0
+            } else {
+                advanced_m
+            };
+            // A tile still yielding creeps slowly: keep it awake while its
+            // rest point moves (rapier would put it to sleep mid-way).
+            let moving = recovering || (recovered_m - plastic_m).abs() > 1e-7;
+            if let Some(joint) = world.impulse_joints.get_mut(tile.joint, moving) {
+                let s = tile.spring;
+                joint.data.set_motor_position(
+                    JointAxis::LinX,
+                    (tile.preload_m - recovered_m) as f32,
+                    s.stiffness_n_per_m as f32,
+                    s.damping_n_s_per_m as f32,
+                );
+            }
+            if let Some(Some(tile)) = self.tiles.get_mut(index) {
+                tile.soil = Some((model, recovered_m));
+            }
+        }
+    }
+
+    fn reset(&mut self, world: &mut PhysicsWorld) {
+        for index in 0..self.tiles.len() {
+            let Some(tile) = self.tiles[index] else {
+                continue;
+            };
+            let Some(body) = world.bodies.get(tile.body) else {
+                continue;
+            };
+            let yielded = tile.soil.is_some_and(|(_, plastic_m)| plastic_m > 0.0);
+            if body.is_sleeping() && !yielded {
+                continue; // asleep and elastic means at rest already
+            }
+            self.put_to_rest(world, index, tile.body);
+            if let Some(Some(Tile {
+                soil: Some((_, plastic_m)),
+                ..
+            })) = self.tiles.get_mut(index)
+            {
+                *plastic_m = 0.0;
+            }
         }
     }
 
@@ -508,7 +733,7 @@ impl Terrain for TiledTerrain {
         match self.cell_at(x_m, y_m) {
             None => self.base_top_m(),
             Some((ix, iy)) => match self.tiles.get(ix * self.rows + iy).copied().flatten() {
-                Some(handle) => -self.tile_sink_m(world, handle),
+                Some(tile) => -self.tile_sink_m(world, tile.body),
                 None => 0.0,
             },
         }
@@ -550,7 +775,7 @@ impl Terrain for TiledTerrain {
         for ix in xs {
             for iy in ys.clone() {
                 let sink_m = match self.tiles.get(ix * self.rows + iy).copied().flatten() {
-                    Some(handle) => self.tile_sink_m(world, handle),
+                    Some(tile) => self.tile_sink_m(world, tile.body),
                     None => 0.0,
                 };
                 out.push(TileState {
@@ -573,14 +798,75 @@ impl Terrain for TiledTerrain {
     }
 
     fn tile_count(&self) -> usize {
-        self.column_region
-            .iter()
-            .filter(|&&r| self.springs[r].is_some())
-            .count()
-            * self.rows
+        self.cell_springs.iter().flatten().count()
     }
 
     fn tile_geometry_m(&self) -> Option<(f64, f64)> {
         Some((self.params.pitch_m - self.params.gap_m, self.params.pitch_m))
+    }
+
+    /// A depth range's draw (smallest, mean and largest tile depth) and a
+    /// soil's load-sink curve: a fresh tile's sink under each load while
+    /// loading, and the permanent sink once unloaded.
+    fn details(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        for (region, model) in self.regions.iter().zip(&self.models) {
+            let in_region = |ix: usize| self.column_region[ix] == region.index;
+            match *model {
+                RegionModel::ElasticRange { .. } => {
+                    let depths: Vec<f64> = (0..self.columns)
+                        .filter(|&ix| in_region(ix))
+                        .flat_map(|ix| (0..self.rows).map(move |iy| ix * self.rows + iy))
+                        .filter_map(|i| self.cell_springs[i].map(|s| s.depth_m))
+                        .collect();
+                    let n = depths.len().max(1) as f64;
+                    let (lo, hi) = depths
+                        .iter()
+                        .fold((f64::MAX, f64::MIN), |(lo, hi), &d| (lo.min(d), hi.max(d)));
+                    lines.push(format!(
+                        "region {} ({}): {} tiles drew depths {:.2}..{:.2} cm, mean {:.2} cm (seed {})",
+                        region.index,
+                        region.label,
+                        depths.len(),
+                        lo * 100.0,
+                        hi * 100.0,
+                        depths.iter().sum::<f64>() / n * 100.0,
+                        self.ctx.seed
+                    ));
+                }
+                RegionModel::Soil { model, .. } => {
+                    let standing_n = self.ctx.supported_mass_kg * self.ctx.gravity_m_per_s2 / 4.0;
+                    lines.push(format!(
+                        "region {} ({}): k_r {:.1} N/m, yield load {:.1} N, hardening {:.1} N/m, recovery {}",
+                        region.index,
+                        region.label,
+                        model.reload_stiffness_n_per_m,
+                        model.yield_load_n,
+                        model.hardening_n_per_m,
+                        if model.recovery_secs > 0.0 {
+                            format!("tau {} s", model.recovery_secs)
+                        } else {
+                            "none".to_string()
+                        }
+                    ));
+                    lines.push(
+                        "  load (N)  x standing  sink loading (cm)  permanent sink (cm)"
+                            .to_string(),
+                    );
+                    for k in 0..=8 {
+                        let load_n = standing_n * 0.25 * k as f64;
+                        lines.push(format!(
+                            "  {:8.1}  {:10.2}  {:17.2}  {:19.2}",
+                            load_n,
+                            0.25 * k as f64,
+                            model.loading_sink_m(load_n) * 100.0,
+                            model.permanent_sink_m(load_n) * 100.0
+                        ));
+                    }
+                }
+                _ => {}
+            }
+        }
+        lines
     }
 }

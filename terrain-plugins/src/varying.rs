@@ -45,10 +45,7 @@ impl TerrainPlugin for VaryingPlugin {
                 format_length(params.pitch_m)
             ));
         }
-        let depths = spec.surfaces("surfaces").iter().filter_map(|s| match s {
-            Surface::Elastic { depth_m } => Some(*depth_m),
-            Surface::Rigid => None,
-        });
+        let depths = spec.surfaces("surfaces").iter().map(Surface::max_depth_m);
         params.validate(depths)
     }
 

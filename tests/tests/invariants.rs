@@ -208,3 +208,42 @@ fn tiles_meet_only_the_robot() {
         "chassis box + hip, thigh, shank, toe per leg"
     );
 }
+
+#[test]
+fn a_robot_standing_on_soil_sinks_while_its_load_exceeds_the_yield_load_then_stops() {
+    let registry = Registry::builtin();
+    let mut world = world_on(&registry, "soil:4cm", [0.0, 0.0], 0);
+    // The mean sink of the four tiles under the feet, every 0.25 s.
+    let mut sinks_m = Vec::new();
+    let report = robot::stand::stand_observed(&mut world, 5.0, &mut |world, step| {
+        if (step + 1) % 60 == 0 {
+            let feet = world.feet_in_world_m();
+            let sink = feet
+                .iter()
+                .map(|f| -world.terrain().surface_height_m(world.physics(), f.x, f.y))
+                .sum::<f64>()
+                / 4.0;
+            sinks_m.push(sink);
+        }
+    });
+    assert!(report.non_foot_contacts.is_empty(), "{report:?}");
+    // It goes on sinking past the elastic part (1 cm) while the load is
+    // above the hardening yield load...
+    let first_second = sinks_m[3];
+    assert!(first_second > 0.02, "after 1 s: {sinks_m:?}");
+    // ...and stops at the named depth (the robot's weight is the standing load).
+    let last = *sinks_m.last().unwrap();
+    assert!(
+        (last - 0.04).abs() < 0.004,
+        "final sink {last}: {sinks_m:?}"
+    );
+    let last_second = last - sinks_m[sinks_m.len() - 5];
+    assert!(
+        last_second.abs() < 5e-4,
+        "still sinking {last_second} m/s: {sinks_m:?}"
+    );
+    // Sinking only ever goes one way (within the tiles' elastic wobble).
+    for pair in sinks_m.windows(2) {
+        assert!(pair[1] > pair[0] - 1e-3, "{sinks_m:?}");
+    }
+}

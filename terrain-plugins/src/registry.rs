@@ -129,12 +129,17 @@ impl Registry {
                 known: self.known(),
             });
         }
-        let mut parts = trimmed.split(':');
+        // `:` inside parentheses belongs to a nested spec (a varying region).
+        let mut parts = crate::spec::split_top_level(trimmed, ':').into_iter();
         let name = parts.next().unwrap_or_default().trim();
         let mut positional = Vec::new();
         let mut named = Vec::new();
         for part in parts {
-            match part.split_once('=') {
+            // `key=value`, unless the `=` belongs to a parenthesised region
+            match part
+                .split_once('=')
+                .filter(|(key, _)| !key.contains(['(', ',']))
+            {
                 Some((key, value)) => named.push((key.trim().to_string(), value.to_string())),
                 None => positional.push(part.to_string()),
             }

@@ -24,10 +24,15 @@
 
 use std::fmt;
 
-use crate::spec::{ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
+use crate::spec::{Ground, ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
 use crate::tiles::{RegionLayout, TileParams, TiledTerrain, tile_param_decls};
 use crate::units::format_length;
 use crate::{BuildContext, Terrain, TerrainPlugin};
+
+/// Default elastic part of the sink, m.
+const DEFAULT_ELASTIC_M: f64 = 0.01;
+/// Default yield load, a fraction of the standing load.
+const DEFAULT_YIELD_FRACTION: f64 = 0.5;
 
 /// A soil as a spec names it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -86,14 +91,15 @@ impl SoilParams {
 }
 
 impl fmt::Display for SoilParams {
+    /// As a `soil` spec in canonical form (defaults left out).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "soil:{}:elastic={}:yield={}",
-            format_length(self.depth_m),
-            format_length(self.elastic_m),
-            self.yield_fraction
-        )?;
+        write!(f, "soil:{}", format_length(self.depth_m))?;
+        if self.elastic_m != DEFAULT_ELASTIC_M {
+            write!(f, ":elastic={}", format_length(self.elastic_m))?;
+        }
+        if self.yield_fraction != DEFAULT_YIELD_FRACTION {
+            write!(f, ":yield={}", self.yield_fraction)?;
+        }
         if self.recovery_secs > 0.0 {
             write!(f, ":recovery={}", self.recovery_secs)?;
         }
@@ -162,13 +168,13 @@ impl TerrainPlugin for SoilPlugin {
             ParamDecl::optional(
                 "elastic",
                 ParamKind::Length,
-                ParamValue::Length(0.01),
+                ParamValue::Length(DEFAULT_ELASTIC_M),
                 "the part of the sink that springs back when unloaded, default 1cm",
             ),
             ParamDecl::optional(
                 "yield",
                 ParamKind::Number,
-                ParamValue::Number(0.5),
+                ParamValue::Number(DEFAULT_YIELD_FRACTION),
                 "load at which a fresh tile yields, as a fraction of the standing load, default 0.5",
             ),
             ParamDecl::optional(
@@ -189,7 +195,10 @@ impl TerrainPlugin for SoilPlugin {
     }
 
     fn create(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {
-        let layout = RegionLayout::Uniform(Surface::Soil(SoilParams::from_spec(spec)));
+        let layout = RegionLayout::Uniform(Surface {
+            ground: Ground::Soil(SoilParams::from_spec(spec)),
+            friction: None,
+        });
         Box::new(TiledTerrain::new(
             spec.clone(),
             TileParams::from_spec(spec),

@@ -49,9 +49,9 @@ impl ParamKind {
     }
 }
 
-/// One surface of a [`ParamKind::Surfaces`] list.
+/// What the ground of a region is made of.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Surface {
+pub enum Ground {
     /// Rigid ground.
     Rigid,
     /// Elastic tiles that sink this much (metres) under the standing robot.
@@ -71,22 +71,8 @@ pub enum Surface {
     Soil(crate::soil::SoilParams),
 }
 
-impl Surface {
-    /// The surface a depth parameter describes: one depth or a range.
-    pub fn from_depth_range(min_depth_m: f64, max_depth_m: f64) -> Self {
-        if min_depth_m == max_depth_m {
-            Self::Elastic {
-                depth_m: min_depth_m,
-            }
-        } else {
-            Self::ElasticRange {
-                min_depth_m,
-                max_depth_m,
-            }
-        }
-    }
-
-    /// The deepest nominal sink of this surface, metres (0 for rigid).
+impl Ground {
+    /// The deepest nominal sink of this ground, metres (0 for rigid).
     pub fn max_depth_m(&self) -> f64 {
         match *self {
             Self::Rigid => 0.0,
@@ -97,21 +83,138 @@ impl Surface {
     }
 }
 
-impl fmt::Display for Surface {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::Rigid => f.write_str("rigid"),
-            Self::Elastic { depth_m } => f.write_str(&format_length(*depth_m)),
-            Self::ElasticRange {
+/// One surface of a [`ParamKind::Surfaces`] list, or of a tiled terrain:
+/// its ground and, if it has its own, its friction coefficient.
+///
+/// In a list a surface is written `5cm`, `2..5cm`, `rigid`, or as a spec of
+/// the `rigid`, `elastic` or `soil` plugin in parentheses, which may name
+/// the region's friction: `(rigid:friction=0.1)`, `(soil:4cm:yield=0.4)`,
+/// `(elastic:5cm:friction=0.5)`. In a TOML list the parentheses may be left
+/// out: `surfaces = ["5cm", "soil:4cm", "rigid:friction=0.1"]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface {
+    /// what the ground is made of
+    pub ground: Ground,
+    /// the region's friction coefficient; `None`: the terrain's
+    pub friction: Option<f64>,
+}
+
+impl Surface {
+    /// Rigid ground with the terrain's friction.
+    pub fn rigid() -> Self {
+        Self {
+            ground: Ground::Rigid,
+            friction: None,
+        }
+    }
+
+    /// Elastic tiles sinking `depth_m` with the terrain's friction.
+    pub fn elastic(depth_m: f64) -> Self {
+        Self {
+            ground: Ground::Elastic { depth_m },
+            friction: None,
+        }
+    }
+
+    /// The surface a depth parameter describes: one depth or a range.
+    pub fn from_depth_range(min_depth_m: f64, max_depth_m: f64) -> Self {
+        let ground = if min_depth_m == max_depth_m {
+            Ground::Elastic {
+                depth_m: min_depth_m,
+            }
+        } else {
+            Ground::ElasticRange {
                 min_depth_m,
                 max_depth_m,
-            } => write!(
+            }
+        };
+        Self {
+            ground,
+            friction: None,
+        }
+    }
+
+    /// The deepest nominal sink of this surface, metres (0 for rigid).
+    pub fn max_depth_m(&self) -> f64 {
+        self.ground.max_depth_m()
+    }
+
+    /// The surface as a spec of its own (`rigid`, `elastic:5cm`,
+    /// `soil:4cm:...`, with `:friction=` if it has its own): a region's label.
+    pub fn label(&self) -> String {
+        let text = match self.ground {
+            Ground::Rigid => "rigid".to_string(),
+            Ground::Elastic { .. } | Ground::ElasticRange { .. } => format!(
+                "elastic:{}",
+                Self {
+                    friction: None,
+                    ..*self
+                }
+            ),
+            Ground::Soil(soil) => soil.to_string(),
+        };
+        match self.friction {
+            Some(mu) => format!("{text}:friction={mu}"),
+            None => text,
+        }
+    }
+
+    /// The surface a `rigid`, `elastic` or `soil` spec describes. A spec
+    /// that sets a parameter of the whole tile field (tile, gap, travel,
+    /// damping, tile_mass, length, back, width) is refused: a region takes
+    /// those from the terrain it is part of.
+    pub fn from_spec(spec: &TerrainSpec) -> Result<Self, String> {
+        const REGION_PARAMS: [&str; 5] = ["depth", "friction", "elastic", "yield", "recovery"];
+        if let Some((decl, _)) = spec
+            .params()
+            .find(|(d, v)| !REGION_PARAMS.contains(&d.name) && d.default.as_ref() != Some(*v))
+        {
+            return Err(format!(
+                "region ({spec}) sets {}, which belongs to the whole terrain: a region takes its depth, its friction and soil's parameters",
+                decl.name
+            ));
+        }
+        let friction = spec
+            .params()
+            .find(|(d, _)| d.name == "friction")
+            .and_then(|(d, v)| (d.default.as_ref() != Some(v)).then(|| spec.number("friction")));
+        let ground = match spec.plugin() {
+            "rigid" => Ground::Rigid,
+            "elastic" => {
+                let (min_m, max_m) = spec.depth_range_m("depth");
+                Self::from_depth_range(min_m, max_m).ground
+            }
+            "soil" => Ground::Soil(crate::soil::SoilParams::from_spec(spec)),
+            other => {
+                return Err(format!(
+                    "a region is rigid, elastic or soil ground, not {other}"
+                ));
+            }
+        };
+        Ok(Self { ground, friction })
+    }
+}
+
+impl fmt::Display for Surface {
+    /// The short forms (`rigid`, `5cm`, `2cm..5cm`) where they say it all,
+    /// else the spec in parentheses.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match (&self.ground, self.friction) {
+            (Ground::Rigid, None) => f.write_str("rigid"),
+            (Ground::Elastic { depth_m }, None) => f.write_str(&format_length(*depth_m)),
+            (
+                Ground::ElasticRange {
+                    min_depth_m,
+                    max_depth_m,
+                },
+                None,
+            ) => write!(
                 f,
                 "{}..{}",
                 format_length(*min_depth_m),
                 format_length(*max_depth_m)
             ),
-            Self::Soil(soil) => write!(f, "{soil}"),
+            _ => write!(f, "({})", self.label()),
         }
     }
 }
@@ -259,11 +362,78 @@ fn parse_depth_range(text: &str) -> Result<(f64, f64), String> {
     Ok((min_m, max_m))
 }
 
+/// Splits `text` at each `separator` outside parentheses.
+pub(crate) fn split_top_level(text: &str, separator: char) -> Vec<&str> {
+    let mut parts = Vec::new();
+    let (mut depth, mut start) = (0i32, 0);
+    for (i, c) in text.char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            c if c == separator && depth == 0 => {
+                parts.push(&text[start..i]);
+                start = i + c.len_utf8();
+            }
+            _ => {}
+        }
+    }
+    parts.push(&text[start..]);
+    parts
+}
+
+/// The plugins a region of a surfaces list may name.
+fn surface_registry() -> crate::Registry {
+    let mut registry = crate::Registry::empty();
+    for plugin in [
+        Box::new(crate::rigid::RigidPlugin) as Box<dyn crate::TerrainPlugin>,
+        Box::new(crate::elastic::ElasticPlugin),
+        Box::new(crate::soil::SoilPlugin),
+    ] {
+        registry
+            .register(plugin)
+            .expect("the surface plugins' names are unique and valid");
+    }
+    registry
+}
+
+/// One nested surface spec, `(soil:4cm)` or (in TOML lists) `soil:4cm`.
+fn parse_nested_surface(item: &str) -> Result<Surface, String> {
+    let inner = item
+        .strip_prefix('(')
+        .map(|rest| {
+            rest.strip_suffix(')')
+                .ok_or_else(|| format!("item {item:?} opens a parenthesis it does not close"))
+        })
+        .transpose()?
+        .unwrap_or(item);
+    let plugin = inner.split(':').next().unwrap_or_default().trim();
+    if !["rigid", "elastic", "soil"].contains(&plugin) {
+        return Err(format!(
+            "item {item:?}: a region is rigid, elastic or soil ground, not {plugin:?}"
+        ));
+    }
+    let spec = surface_registry()
+        .parse(inner)
+        .map_err(|e| format!("item {item:?}: {e}"))?;
+    Surface::from_spec(&spec).map_err(|e| format!("item {item:?}: {e}"))
+}
+
 fn parse_surfaces(text: &str) -> Result<Vec<Surface>, String> {
     if text.is_empty() {
         return Err("the list is empty".to_string());
     }
-    let items: Vec<&str> = text.split(',').map(str::trim).collect();
+    let depth = text.chars().fold(0i32, |d, c| match c {
+        '(' => d + 1,
+        ')' => d - 1,
+        _ => d,
+    });
+    if depth != 0 {
+        return Err(format!("{text:?} has unbalanced parentheses"));
+    }
+    let items: Vec<&str> = split_top_level(text, ',')
+        .into_iter()
+        .map(str::trim)
+        .collect();
     let mut out = vec![None; items.len()];
     // Walk backwards so a bare number picks up the next unit written after it.
     let mut pending_unit: Option<LengthUnit> = None;
@@ -272,7 +442,11 @@ fn parse_surfaces(text: &str) -> Result<Vec<Surface>, String> {
             return Err(format!("item {} of {text:?} is empty", i + 1));
         }
         if item.eq_ignore_ascii_case("rigid") {
-            out[i] = Some(Surface::Rigid);
+            out[i] = Some(Surface::rigid());
+            continue;
+        }
+        if item.starts_with('(') || item.contains(':') {
+            out[i] = Some(parse_nested_surface(item)?);
             continue;
         }
         if item.contains("..") {
@@ -306,7 +480,7 @@ fn parse_surfaces(text: &str) -> Result<Vec<Surface>, String> {
         if depth_m <= 0.0 {
             return Err(format!("depth {item:?} must be greater than zero"));
         }
-        out[i] = Some(Surface::Elastic { depth_m });
+        out[i] = Some(Surface::elastic(depth_m));
     }
     Ok(out.into_iter().flatten().collect())
 }

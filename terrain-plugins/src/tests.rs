@@ -24,11 +24,11 @@ fn builtin_specs_parse_to_si_values() {
     assert_eq!(
         varying.surfaces("surfaces"),
         &[
-            Surface::Elastic { depth_m: 0.02 },
-            Surface::Elastic { depth_m: 0.03 },
-            Surface::Elastic { depth_m: 0.04 },
-            Surface::Elastic { depth_m: 0.05 },
-            Surface::Rigid
+            Surface::elastic(0.02),
+            Surface::elastic(0.03),
+            Surface::elastic(0.04),
+            Surface::elastic(0.05),
+            Surface::rigid()
         ]
     );
     let named = parse("elastic:3cm:travel=12cm:length=40m").unwrap();
@@ -59,6 +59,19 @@ fn display_is_canonical_and_round_trips() {
         ("rigid:friction=1", "rigid"),
         ("rigid:friction=0.1", "rigid:friction=0.1"),
         ("soil:4cm", "soil:4cm"),
+        (
+            "varying:2m:5cm,(soil:4cm),(rigid:friction=0.1)",
+            "varying:2m:5cm,(soil:4cm),(rigid:friction=0.1)",
+        ),
+        ("varying:2m:(elastic:5cm),(rigid)", "varying:2m:5cm,rigid"),
+        (
+            "varying:2m:(elastic:2..5cm:friction=0.4),(soil:3cm:elastic=5mm:recovery=4)",
+            "varying:2m:(elastic:2cm..5cm:friction=0.4),(soil:3cm:elastic=5mm:recovery=4)",
+        ),
+        (
+            "varying:2m:(elastic:50mm:friction=1),rigid:travel=20cm",
+            "varying:2m:5cm,rigid:travel=20cm",
+        ),
         (
             "soil:4cm:elastic=5mm:yield=0.3:recovery=2",
             "soil:4cm:elastic=5mm:yield=0.3:recovery=2",
@@ -133,6 +146,17 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ("soil:20cm", "beyond the tile travel"),
         ("soil:4cm:recovery=-1", "must not be negative"),
         ("soil", "takes 1 positional argument"),
+        (
+            "varying:2m:(soil:4cm:tile=10cm)",
+            "belongs to the whole terrain",
+        ),
+        (
+            "varying:2m:(varying:1m:2cm)",
+            "a region is rigid, elastic or soil ground",
+        ),
+        ("varying:2m:(soil:4cm", "unbalanced parentheses"),
+        ("varying:2m:5cm,(soil:30cm)", "beyond the tile travel"),
+        ("varying:2m:(rigid:friction=-1)", "must not be negative"),
     ];
     for (input, expected) in cases {
         let err = parse(input).expect_err(input).to_string();
@@ -584,4 +608,55 @@ fn friction_is_the_contacts_coefficient_on_rigid_ground_and_tiles() {
     // the default (1.0) holds the same push
     assert!(box_slide_m("rigid", 0.4).abs() < 1e-3);
     assert!(box_slide_m("elastic:5cm", 0.4).abs() < 1e-3);
+}
+
+#[test]
+fn varying_regions_take_any_surface_spec_with_its_own_friction() {
+    let spec = parse("varying:2m:(rigid:friction=0.3),(soil:4cm),5cm:friction=0.8").unwrap();
+    let (mut world, mut terrain) = world_with(&spec.to_string(), 0);
+    let labels: Vec<&str> = terrain.regions().iter().map(|r| r.label.as_str()).collect();
+    assert_eq!(labels[0], "rigid:friction=0.3");
+    for label in &labels[1..] {
+        assert!(
+            ["rigid:friction=0.3", "soil:4cm", "elastic:5cm"].contains(label),
+            "{labels:?}"
+        );
+    }
+    // The start region is its own slippery ground: a box slides there as on
+    // rigid:friction=0.3.
+    let slid = box_slide_m(&spec.to_string(), 0.4);
+    let expected_m = 0.5 * 0.1 * 9.81 * 0.09;
+    assert!(
+        (slid - expected_m).abs() < 0.25 * expected_m,
+        "slid {slid} m"
+    );
+    // A soil region's tiles stay down once loaded.
+    let soil = terrain
+        .regions()
+        .iter()
+        .find(|r| r.label == "soil:4cm")
+        .expect("seed 0 draws a soil region");
+    let x = (soil.x_range_m.0 + soil.x_range_m.1) / 2.0;
+    let mut tiles = Vec::new();
+    terrain.tiles_in(&world, Rect::around([x, 0.0], 0.11), &mut tiles);
+    let tile = tiles[0];
+    let (handle, _) = world
+        .bodies
+        .iter()
+        .find(|(_, b)| {
+            b.is_dynamic()
+                && (f64::from(b.translation().x) - tile.center_m[0]).abs() < 0.01
+                && (f64::from(b.translation().y) - tile.center_m[1]).abs() < 0.01
+        })
+        .unwrap();
+    world.bodies[handle].add_force(Vector::new(0.0, 0.0, -STANDING_LOAD_N as f32), true);
+    for _ in 0..480 {
+        step(&mut world, &mut terrain);
+    }
+    world.bodies[handle].reset_forces(true);
+    for _ in 0..480 {
+        step(&mut world, &mut terrain);
+    }
+    let sink_m = -terrain.surface_height_m(&world, tile.center_m[0], tile.center_m[1]);
+    assert!((sink_m - 0.03).abs() < 0.0015, "permanent sink {sink_m}");
 }

@@ -32,7 +32,7 @@ use rand_chacha::ChaCha8Rng;
 use rapier3d::prelude::*;
 
 use crate::soil::SoilModel;
-use crate::spec::{ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
+use crate::spec::{Ground, ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
 use crate::units::format_length;
 use crate::{BuildContext, Rect, Region, Terrain, TileState, terrain_collision_groups};
 
@@ -267,6 +267,8 @@ pub struct TiledTerrain {
     ctx: BuildContext,
     regions: Vec<Region>,
     models: Vec<RegionModel>,
+    /// each region's friction coefficient
+    frictions: Vec<f64>,
     /// one entry per cell, row-major by column: `None` for rigid cells
     cell_springs: Vec<Option<TileSpring>>,
     /// region index of each column
@@ -328,6 +330,10 @@ impl TiledTerrain {
         let half = pitch / 2.0;
         let mut regions = Vec::new();
         let mut models = Vec::new();
+        let frictions: Vec<f64> = region_surfaces
+            .iter()
+            .map(|s| s.friction.unwrap_or(params.friction))
+            .collect();
         for (index, surface) in region_surfaces.iter().enumerate() {
             let first = column_region.iter().position(|&r| r == index).unwrap_or(0);
             let last = column_region.iter().rposition(|&r| r == index).unwrap_or(0);
@@ -338,12 +344,12 @@ impl TiledTerrain {
             };
             // What `terrain show` reports: for a range, the springs of its
             // middle depth.
-            let (label, model, reported, expected_sink_m) = match *surface {
-                Surface::Rigid => ("rigid".to_string(), RegionModel::Rigid, None, 0.0),
-                Surface::Elastic { depth_m } => {
+            let (label, model, reported, expected_sink_m) = match surface.ground {
+                Ground::Rigid => (surface.label(), RegionModel::Rigid, None, 0.0),
+                Ground::Elastic { depth_m } => {
                     let (k, c) = spring_at(depth_m);
                     (
-                        format!("elastic:{surface}"),
+                        surface.label(),
                         RegionModel::Elastic {
                             stiffness_n_per_m: k,
                             damping_n_s_per_m: c,
@@ -352,13 +358,13 @@ impl TiledTerrain {
                         depth_m,
                     )
                 }
-                Surface::ElasticRange {
+                Ground::ElasticRange {
                     min_depth_m,
                     max_depth_m,
                 } => {
                     let middle_m = (min_depth_m + max_depth_m) / 2.0;
                     (
-                        format!("elastic:{surface}"),
+                        surface.label(),
                         RegionModel::ElasticRange {
                             min_depth_m,
                             max_depth_m,
@@ -367,11 +373,11 @@ impl TiledTerrain {
                         middle_m,
                     )
                 }
-                Surface::Soil(soil) => {
+                Ground::Soil(soil) => {
                     let model = soil.model(ctx);
                     let c = params.damping_n_s_per_m(model.reload_stiffness_n_per_m, ctx);
                     (
-                        surface.to_string(),
+                        surface.label(),
                         RegionModel::Soil {
                             model,
                             damping_n_s_per_m: c,
@@ -440,6 +446,7 @@ impl TiledTerrain {
             ctx: ctx.clone(),
             regions,
             models,
+            frictions,
             cell_springs,
             column_region,
             columns,
@@ -552,7 +559,9 @@ impl Terrain for TiledTerrain {
 
         // Rigid regions: one solid block per region, top at z = 0.
         let depth_below = p.travel_m + TILE_THICKNESS_M;
-        for (region, model) in self.regions.iter().zip(&self.models) {
+        for ((region, model), friction) in
+            self.regions.iter().zip(&self.models).zip(&self.frictions)
+        {
             if matches!(model, RegionModel::Rigid) {
                 let (x0, x1) = region.x_range_m;
                 let block = ColliderBuilder::cuboid(
@@ -565,7 +574,7 @@ impl Terrain for TiledTerrain {
                     0.0,
                     (-depth_below / 2.0) as f32,
                 ))
-                .friction(p.friction as f32)
+                .friction(*friction as f32)
                 .friction_combine_rule(CoefficientCombineRule::Min)
                 .collision_groups(terrain_collision_groups());
                 world.insert_collider(block, Some(base));
@@ -596,7 +605,7 @@ impl Terrain for TiledTerrain {
                     (TILE_THICKNESS_M / 2.0) as f32,
                 )
                 .mass(p.tile_mass_kg as f32)
-                .friction(p.friction as f32)
+                .friction(self.frictions[self.column_region[ix]] as f32)
                 .friction_combine_rule(CoefficientCombineRule::Min)
                 .collision_groups(terrain_collision_groups());
                 world.insert_collider(collider, Some(handle));

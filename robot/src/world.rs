@@ -246,6 +246,25 @@ impl World {
         );
         let squat = self.squat_rad.clone();
         self.place_robot(&base, &squat);
+        // On relief the ground under a foot may be higher than under the
+        // base: lift the robot until the highest foot clears it too. (Flat
+        // terrains and tiles at rest are level: nothing changes there.)
+        let under_feet = self
+            .feet_in_world_m()
+            .iter()
+            .map(|f| self.terrain.surface_height_m(&self.physics, f.x, f.y))
+            .fold(surface, f64::max);
+        if under_feet > surface {
+            let lifted = Isometry3::new(
+                Vector3::new(
+                    x,
+                    y,
+                    under_feet + SQUAT_FOOT_DEPTH_M + foot_radius + clearance_m,
+                ),
+                Vector3::z() * yaw_rad,
+            );
+            self.place_robot(&lifted, &squat);
+        }
     }
 
     /// Puts the robot's base at `base_pose` (world frame) with joint angles

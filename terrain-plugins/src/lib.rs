@@ -17,6 +17,7 @@
 
 pub mod elastic;
 pub mod registry;
+pub mod relief;
 pub mod rigid;
 pub mod soil;
 pub mod spec;

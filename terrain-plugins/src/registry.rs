@@ -54,7 +54,7 @@ impl Registry {
     }
 
     /// A registry with the built-in plugins: `rigid`, `elastic`, `varying`,
-    /// `soil`.
+    /// `soil`, `slope`, `steps`, `rough`.
     pub fn builtin() -> Self {
         let mut registry = Self::empty();
         for plugin in [
@@ -62,6 +62,9 @@ impl Registry {
             Box::new(crate::elastic::ElasticPlugin),
             Box::new(crate::varying::VaryingPlugin),
             Box::new(crate::soil::SoilPlugin),
+            Box::new(crate::relief::SlopePlugin),
+            Box::new(crate::relief::StepsPlugin),
+            Box::new(crate::relief::RoughPlugin),
         ] {
             registry
                 .register(plugin)

@@ -111,7 +111,7 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ("", "empty"),
         (
             "sand:5cm",
-            "unknown terrain \"sand\" (known terrains: rigid, elastic, varying, soil)",
+            "unknown terrain \"sand\" (known terrains: rigid, elastic, varying, soil, slope, steps, rough)",
         ),
         ("elastic", "takes 1 positional argument(s), got 0"),
         ("elastic:5cm:3cm", "takes 1 positional argument(s), got 2"),
@@ -157,6 +157,13 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ("varying:2m:(soil:4cm", "unbalanced parentheses"),
         ("varying:2m:5cm,(soil:30cm)", "beyond the tile travel"),
         ("varying:2m:(rigid:friction=-1)", "must not be negative"),
+        ("slope:50", "too steep"),
+        ("slope:-5", "must not be negative"),
+        ("steps:40cm:1m", "at most 30cm"),
+        ("steps:5cm:5cm", "shorter than 10cm"),
+        ("steps:5cm", "takes 2 positional argument"),
+        ("rough:20cm", "at most 15cm"),
+        ("rough:2cm:cell=1mm", "more than 500000"),
     ];
     for (input, expected) in cases {
         let err = parse(input).expect_err(input).to_string();
@@ -659,4 +666,79 @@ fn varying_regions_take_any_surface_spec_with_its_own_friction() {
     }
     let sink_m = -terrain.surface_height_m(&world, tile.center_m[0], tile.center_m[1]);
     assert!((sink_m - 0.03).abs() < 0.0015, "permanent sink {sink_m}");
+}
+
+/// Where a 1 cm ball dropped at (x, y) comes to rest: the height of its
+/// lowest point, m.
+fn ball_rest_m(spec: &str, seed: u64, x: f64, y: f64) -> f64 {
+    let (mut world, mut terrain) = world_with(spec, seed);
+    let top = terrain.surface_height_m(&world, x, y) + 0.03;
+    let body = world.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(x as f32, y as f32, top as f32))
+            .lock_rotations()
+            .enabled_translations(false, false, true),
+    );
+    let ball = ColliderBuilder::ball(0.01)
+        .mass(0.1)
+        .collision_groups(robot_collision_groups());
+    world.insert_collider(ball, Some(body));
+    for _ in 0..240 {
+        step(&mut world, &mut terrain);
+    }
+    f64::from(world.bodies[body].translation().z) - 0.01
+}
+
+#[test]
+fn relief_surfaces_are_where_their_colliders_are() {
+    for (spec, points) in [
+        (
+            "slope:10",
+            vec![(0.0, 0.0), (1.0, 0.3), (-1.5, -0.5), (7.3, 1.0)],
+        ),
+        (
+            "steps:5cm:1m",
+            vec![(-1.0, 0.0), (0.5, 0.0), (1.5, 0.2), (4.7, -1.0)],
+        ),
+        (
+            "rough:2cm",
+            vec![(0.0, 0.0), (0.33, 0.41), (2.71, -0.88), (-1.23, 1.1)],
+        ),
+    ] {
+        let (world, terrain) = world_with(spec, 5);
+        for (x, y) in points {
+            let h = terrain.surface_height_m(&world, x, y);
+            let rest = ball_rest_m(spec, 5, x, y);
+            // a ball on a tilted face touches it off-centre: 1 cm x (1/cos - 1)
+            assert!(
+                (rest - h).abs() < 1.5e-3,
+                "{spec} at ({x}, {y}): surface {h}, ball rests at {rest}"
+            );
+        }
+    }
+    let (world, slope) = world_with("slope:10", 0);
+    assert!((slope.surface_height_m(&world, 1.0, 0.0) - 10f64.to_radians().tan()).abs() < 1e-12);
+    let (world, steps) = world_with("steps:5cm:1m", 0);
+    assert_eq!(steps.surface_height_m(&world, 2.5, 0.0), 0.1);
+    assert_eq!(steps.surface_height_m(&world, -0.5, 0.0), 0.0);
+}
+
+#[test]
+fn rough_heights_cover_their_amplitude_and_follow_the_seed() {
+    let heights = |seed: u64| -> Vec<f64> {
+        let (world, terrain) = world_with("rough:3cm:length=4m", seed);
+        (0..400)
+            .map(|k| {
+                let (x, y) = (-2.0 + 0.3 * (k / 20) as f64, -1.0 + 0.1 * (k % 20) as f64);
+                terrain.surface_height_m(&world, x, y)
+            })
+            .collect()
+    };
+    let a = heights(1);
+    assert!(a.iter().all(|h| h.abs() <= 0.03 + 1e-12));
+    let spread =
+        a.iter().copied().fold(f64::MIN, f64::max) - a.iter().copied().fold(f64::MAX, f64::min);
+    assert!(spread > 0.04, "spread {spread}");
+    assert_eq!(heights(1), a);
+    assert_ne!(heights(2), a);
 }

@@ -247,3 +247,53 @@ fn a_robot_standing_on_soil_sinks_while_its_load_exceeds_the_yield_load_then_sto
         assert!(pair[1] > pair[0] - 1e-3, "{sinks_m:?}");
     }
 }
+
+/// The robot standing `seconds` on `spec`: its base x every 0.25 s, its
+/// final tilt (degrees) and the stand report.
+fn stand_tracking_x(spec: &str, seconds: f64) -> (Vec<f64>, f64, robot::stand::StandReport) {
+    let registry = Registry::builtin();
+    let mut world = world_on(&registry, spec, [0.0, 0.0], 0);
+    let mut xs = Vec::new();
+    let report = robot::stand::stand_observed(&mut world, seconds, &mut |world, step| {
+        if (step + 1) % 60 == 0 {
+            xs.push(world.base_pose().translation.vector.x);
+        }
+    });
+    let up = world.base_pose().rotation * nalgebra::Vector3::z();
+    let tilt_deg = up.z.clamp(-1.0, 1.0).acos().to_degrees();
+    (xs, tilt_deg, report)
+}
+
+#[test]
+fn the_robot_stands_on_a_ten_degree_slope_and_slides_down_it_at_mu_0_1() {
+    let (xs, tilt_deg, report) = stand_tracking_x("slope:10", 4.0);
+    assert!(report.non_foot_contacts.is_empty(), "{report:?}");
+    // tilted with the ground (within a few degrees of 10), and still
+    assert!((tilt_deg - 10.0).abs() < 4.0, "tilt {tilt_deg}: {report:?}");
+    let last_two_seconds = xs[xs.len() - 1] - xs[xs.len() - 9];
+    assert!(
+        last_two_seconds.abs() < 0.005,
+        "crept {last_two_seconds} m: {xs:?}"
+    );
+    // tan 10 deg = 0.18 > 0.1: it slides down (towards -x), and keeps going
+    let (xs, _, _) = stand_tracking_x("slope:10:friction=0.1", 4.0);
+    let slid = xs[xs.len() - 1] - xs[3];
+    assert!(slid < -0.1, "slid {slid} m: {xs:?}");
+}
+
+#[test]
+fn the_robot_stands_on_steps_and_rough_ground_at_their_height() {
+    for spec in ["steps:5cm:1m", "rough:1cm"] {
+        let (xs, tilt_deg, report) = stand_tracking_x(spec, 3.0);
+        assert!(report.non_foot_contacts.is_empty(), "{spec}: {report:?}");
+        assert!(tilt_deg < 5.0, "{spec}: tilt {tilt_deg}");
+        assert!((xs[xs.len() - 1] - xs[3]).abs() < 0.01, "{spec}: {xs:?}");
+    }
+    // one step up: the same stance 5 cm higher
+    let registry = Registry::builtin();
+    let mut low = world_on(&registry, "steps:5cm:1m", [0.5, 0.0], 0);
+    let mut high = world_on(&registry, "steps:5cm:1m", [1.5, 0.0], 0);
+    let (a, b) = (robot::stand(&mut low, 2.0), robot::stand(&mut high, 2.0));
+    let lift = b.base_height_m - a.base_height_m;
+    assert!((lift - 0.05).abs() < 0.003, "lift {lift}");
+}

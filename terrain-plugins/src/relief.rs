@@ -1,0 +1,447 @@
+//! Rigid relief, the terrains of legged_gym's curriculum: `slope:<degrees>`
+//! (a plane rising along +x), `steps:<height>:<length>` (stairs up along +x
+//! from x = 0) and `rough:<amplitude>` (random heights on a grid, drawn with
+//! the world's seed). Each takes `friction=` as `rigid` does.
+//!
+//! The surface height h(x, y) a terrain answers is the collider's own: the
+//! plane, the step tops, and for `rough` the same two triangles per grid cell
+//! the collider's mesh is made of (split along the cell's diagonal from
+//! (x0, y0) to (x1, y1)).
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rapier3d::prelude::*;
+
+use crate::spec::{ParamDecl, ParamKind, ParamValue, TerrainSpec};
+use crate::tiles::GROUND_FRICTION;
+use crate::units::format_length;
+use crate::{
+    BuildContext, Rect, Region, Terrain, TerrainPlugin, TileState, terrain_collision_groups,
+};
+
+/// Stream of the `rough` height draw (mixed into the build seed).
+const ROUGH_STREAM: u64 = 0x726f_7567_6821;
+/// How far below its lowest point the relief's solid reaches, m.
+const BASE_DEPTH_M: f64 = 1.0;
+
+fn friction_decl() -> ParamDecl {
+    ParamDecl::optional(
+        "friction",
+        ParamKind::Number,
+        ParamValue::Number(f64::from(GROUND_FRICTION)),
+        "friction coefficient of the ground (the contact's, min with the robot's 1.0), default 1",
+    )
+}
+
+fn extent_decls() -> Vec<ParamDecl> {
+    vec![
+        ParamDecl::optional(
+            "length",
+            ParamKind::Length,
+            ParamValue::Length(20.0),
+            "extent along x from x = 0, default 20m",
+        ),
+        ParamDecl::optional(
+            "back",
+            ParamKind::Length,
+            ParamValue::Length(2.0),
+            "how far the ground reaches behind x = 0, default 2m",
+        ),
+        ParamDecl::optional(
+            "width",
+            ParamKind::Length,
+            ParamValue::Length(3.0),
+            "extent across (y), centred on y = 0, default 3m",
+        ),
+    ]
+}
+
+/// The shape of a relief.
+#[derive(Debug, Clone, PartialEq)]
+enum Shape {
+    /// h = x tan(angle)
+    Slope { tan: f64 },
+    /// h = height floor(x / length) for 0 <= x, 0 behind
+    Steps { height_m: f64, length_m: f64 },
+    /// heights on a grid of `cell_m` squares from (x0, y0), row-major by x
+    Rough {
+        cell_m: f64,
+        origin_m: [f64; 2],
+        columns: usize,
+        rows: usize,
+        heights_m: Vec<f64>,
+    },
+}
+
+/// A rigid relief.
+pub struct Relief {
+    spec: TerrainSpec,
+    shape: Shape,
+    extent: Rect,
+    friction: f64,
+    regions: Vec<Region>,
+}
+
+impl Relief {
+    /// `length_key` names the extent along x (`length`, or `extent` for
+    /// `steps`, whose `length` is a step's).
+    fn new(spec: &TerrainSpec, shape: Shape, length_key: &str) -> Self {
+        let (length_m, back_m, width_m) = (
+            spec.length_m(length_key),
+            spec.length_m("back"),
+            spec.length_m("width"),
+        );
+        let extent = Rect {
+            min_m: [-back_m, -width_m / 2.0],
+            max_m: [length_m, width_m / 2.0],
+        };
+        Self {
+            spec: spec.clone(),
+            shape,
+            extent,
+            friction: spec.number("friction"),
+            regions: vec![Region {
+                index: 0,
+                label: spec.to_string(),
+                x_range_m: (extent.min_m[0], extent.max_m[0]),
+                stiffness_n_per_m: None,
+                damping_n_s_per_m: None,
+                expected_sink_m: 0.0,
+            }],
+        }
+    }
+
+    /// The surface height at (x, y), metres (the shape continued past the
+    /// extent's ends along x; clamped to the grid for `rough`).
+    pub fn height_m(&self, x_m: f64, y_m: f64) -> f64 {
+        match &self.shape {
+            Shape::Slope { tan } => x_m * tan,
+            Shape::Steps { height_m, length_m } => {
+                let x = x_m.clamp(0.0, self.extent.max_m[0]);
+                height_m * (x / length_m).floor()
+            }
+            Shape::Rough {
+                cell_m,
+                origin_m,
+                columns,
+                rows,
+                heights_m,
+            } => {
+                let gx = ((x_m - origin_m[0]) / cell_m).clamp(0.0, *columns as f64);
+                let gy = ((y_m - origin_m[1]) / cell_m).clamp(0.0, *rows as f64);
+                let (i, j) = ((gx as usize).min(columns - 1), (gy as usize).min(rows - 1));
+                let (fx, fy) = (gx - i as f64, gy - j as f64);
+                let h = |a: usize, b: usize| heights_m[a * (rows + 1) + b];
+                let (h00, h10, h01, h11) = (h(i, j), h(i + 1, j), h(i, j + 1), h(i + 1, j + 1));
+                if fx >= fy {
+                    h00 + fx * (h10 - h00) + fy * (h11 - h10)
+                } else {
+                    h00 + fy * (h01 - h00) + fx * (h11 - h01)
+                }
+            }
+        }
+    }
+
+    fn collider(&self, builder: ColliderBuilder) -> ColliderBuilder {
+        builder
+            .friction(self.friction as f32)
+            .friction_combine_rule(CoefficientCombineRule::Min)
+            .collision_groups(terrain_collision_groups())
+    }
+}
+
+impl Terrain for Relief {
+    fn spec(&self) -> &TerrainSpec {
+        &self.spec
+    }
+
+    fn build(&mut self, world: &mut PhysicsWorld) {
+        let ground = world.insert_body(RigidBodyBuilder::fixed());
+        let e = self.extent;
+        let half_y = ((e.max_m[1] - e.min_m[1]) / 2.0) as f32;
+        match &self.shape {
+            Shape::Slope { tan } => {
+                let angle = tan.atan();
+                let normal = Vector::new(-angle.sin() as f32, 0.0, angle.cos() as f32);
+                let plane = ColliderBuilder::halfspace(rapier3d::na::Unit::new_unchecked(
+                    normal.normalize(),
+                ));
+                world.insert_collider(self.collider(plane), Some(ground));
+            }
+            Shape::Steps { height_m, length_m } => {
+                // behind x = 0 and each step: a block from below the base to its top
+                let steps = (e.max_m[0] / length_m).ceil() as usize;
+                let mut blocks = vec![(e.min_m[0] - 50.0, 0.0, 0.0)];
+                for k in 0..steps {
+                    let x0 = k as f64 * length_m;
+                    blocks.push((x0, (x0 + length_m).min(e.max_m[0]), k as f64 * height_m));
+                }
+                if let Some(&(_, last_end, top)) = blocks.last() {
+                    blocks.push((last_end, last_end + 50.0, top)); // the landing beyond
+                }
+                for (x0, x1, top) in blocks {
+                    let bottom = -BASE_DEPTH_M - height_m.abs() * steps as f64;
+                    let block = ColliderBuilder::cuboid(
+                        ((x1 - x0) / 2.0) as f32,
+                        half_y + 50.0,
+                        ((top - bottom) / 2.0) as f32,
+                    )
+                    .translation(Vector::new(
+                        ((x0 + x1) / 2.0) as f32,
+                        0.0,
+                        ((top + bottom) / 2.0) as f32,
+                    ));
+                    world.insert_collider(self.collider(block), Some(ground));
+                }
+            }
+            Shape::Rough {
+                cell_m,
+                origin_m,
+                columns,
+                rows,
+                heights_m,
+            } => {
+                let mut vertices = Vec::with_capacity((columns + 1) * (rows + 1));
+                for i in 0..=*columns {
+                    for j in 0..=*rows {
+                        vertices.push(Vector::new(
+                            (origin_m[0] + i as f64 * cell_m) as f32,
+                            (origin_m[1] + j as f64 * cell_m) as f32,
+                            heights_m[i * (rows + 1) + j] as f32,
+                        ));
+                    }
+                }
+                let index = |i: usize, j: usize| (i * (rows + 1) + j) as u32;
+                let mut triangles = Vec::with_capacity(2 * columns * rows);
+                for i in 0..*columns {
+                    for j in 0..*rows {
+                        // counter-clockwise seen from above: normals point up
+                        triangles.push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
+                        triangles.push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
+                    }
+                }
+                let mesh = ColliderBuilder::trimesh(vertices, triangles)
+                    .expect("a grid of at least one cell makes a valid mesh");
+                world.insert_collider(self.collider(mesh), Some(ground));
+                // a floor under the whole grid, and flat ground beyond it
+                let low = heights_m.iter().copied().fold(f64::INFINITY, f64::min);
+                let floor = ColliderBuilder::cuboid(100.0, 100.0, 0.5).translation(Vector::new(
+                    0.0,
+                    0.0,
+                    (low - 0.05 - 0.5) as f32,
+                ));
+                world.insert_collider(self.collider(floor), Some(ground));
+            }
+        }
+    }
+
+    fn surface_height_m(&self, _world: &PhysicsWorld, x_m: f64, y_m: f64) -> f64 {
+        self.height_m(x_m, y_m)
+    }
+
+    fn regions(&self) -> &[Region] {
+        &self.regions
+    }
+
+    fn region_index_at(&self, _x_m: f64, _y_m: f64) -> usize {
+        0
+    }
+
+    fn tiles_in(&self, _world: &PhysicsWorld, _area: Rect, _out: &mut Vec<TileState>) {}
+
+    fn extent(&self) -> Rect {
+        self.extent
+    }
+
+    fn tile_count(&self) -> usize {
+        0
+    }
+
+    fn details(&self) -> Vec<String> {
+        match &self.shape {
+            Shape::Rough { heights_m, .. } => {
+                let n = heights_m.len() as f64;
+                let mean = heights_m.iter().sum::<f64>() / n;
+                let rms = (heights_m.iter().map(|h| (h - mean).powi(2)).sum::<f64>() / n).sqrt();
+                vec![format!(
+                    "{} grid heights, mean {:.2} cm, rms {:.2} cm (seed draw)",
+                    heights_m.len(),
+                    mean * 100.0,
+                    rms * 100.0
+                )]
+            }
+            Shape::Slope { tan } => vec![format!("rises {:.1} cm per metre along x", tan * 100.0)],
+            Shape::Steps { height_m, length_m } => vec![format!(
+                "{} steps of {} every {}",
+                (self.extent.max_m[0] / length_m).ceil(),
+                format_length(*height_m),
+                format_length(*length_m)
+            )],
+        }
+    }
+}
+
+/// The `slope` plugin.
+pub struct SlopePlugin;
+
+impl TerrainPlugin for SlopePlugin {
+    fn name(&self) -> &'static str {
+        "slope"
+    }
+
+    fn summary(&self) -> &'static str {
+        "rigid ground rising along x at <degrees> (e.g. slope:10)"
+    }
+
+    fn params(&self) -> Vec<ParamDecl> {
+        let mut params = vec![
+            ParamDecl::required(
+                "degrees",
+                ParamKind::Number,
+                "inclination, degrees (rising along +x)",
+            ),
+            friction_decl(),
+        ];
+        params.extend(extent_decls());
+        params
+    }
+
+    fn validate(&self, spec: &TerrainSpec) -> Result<(), String> {
+        let degrees = spec.number("degrees");
+        if degrees >= 45.0 {
+            return Err(format!(
+                "a slope of {degrees} degrees is too steep (below 45)"
+            ));
+        }
+        Ok(())
+    }
+
+    fn create(&self, spec: &TerrainSpec, _ctx: &BuildContext) -> Box<dyn Terrain> {
+        let tan = spec.number("degrees").to_radians().tan();
+        Box::new(Relief::new(spec, Shape::Slope { tan }, "length"))
+    }
+}
+
+/// The `steps` plugin.
+pub struct StepsPlugin;
+
+impl TerrainPlugin for StepsPlugin {
+    fn name(&self) -> &'static str {
+        "steps"
+    }
+
+    fn summary(&self) -> &'static str {
+        "rigid stairs up along x from x = 0: <height> every <length> (e.g. steps:5cm:1m)"
+    }
+
+    fn params(&self) -> Vec<ParamDecl> {
+        let mut params = vec![
+            ParamDecl::required("height", ParamKind::Length, "rise of each step"),
+            ParamDecl::required("length", ParamKind::Length, "run of each step along x"),
+            friction_decl(),
+        ];
+        let mut extent = extent_decls();
+        extent[0].name = "extent";
+        extent[0].doc = "how far the stairs reach along x from x = 0, default 20m";
+        params.extend(extent);
+        params
+    }
+
+    fn validate(&self, spec: &TerrainSpec) -> Result<(), String> {
+        let (height, length) = (spec.length_m("height"), spec.length_m("length"));
+        if height > 0.3 {
+            return Err(format!(
+                "steps of {} are higher than the robot can climb (at most 30cm)",
+                format_length(height)
+            ));
+        }
+        if length < 0.1 {
+            return Err(format!(
+                "steps of {} are shorter than 10cm",
+                format_length(length)
+            ));
+        }
+        Ok(())
+    }
+
+    fn create(&self, spec: &TerrainSpec, _ctx: &BuildContext) -> Box<dyn Terrain> {
+        let shape = Shape::Steps {
+            height_m: spec.length_m("height"),
+            length_m: spec.length_m("length"),
+        };
+        Box::new(Relief::new(spec, shape, "extent"))
+    }
+}
+
+/// The `rough` plugin.
+pub struct RoughPlugin;
+
+impl TerrainPlugin for RoughPlugin {
+    fn name(&self) -> &'static str {
+        "rough"
+    }
+
+    fn summary(&self) -> &'static str {
+        "rigid ground with random heights in +-<amplitude> on a grid, drawn with the seed (e.g. rough:2cm)"
+    }
+
+    fn params(&self) -> Vec<ParamDecl> {
+        let mut params = vec![
+            ParamDecl::required(
+                "amplitude",
+                ParamKind::Length,
+                "heights are drawn uniformly in [-amplitude, amplitude]",
+            ),
+            ParamDecl::optional(
+                "cell",
+                ParamKind::Length,
+                ParamValue::Length(0.1),
+                "grid spacing, default 10cm",
+            ),
+            friction_decl(),
+        ];
+        params.extend(extent_decls());
+        params
+    }
+
+    fn validate(&self, spec: &TerrainSpec) -> Result<(), String> {
+        let (amplitude, cell) = (spec.length_m("amplitude"), spec.length_m("cell"));
+        if amplitude > 0.15 {
+            return Err(format!(
+                "amplitude {} is more than the robot can walk on (at most 15cm)",
+                format_length(amplitude)
+            ));
+        }
+        let cells = (spec.length_m("length") + spec.length_m("back")) / cell
+            * (spec.length_m("width") / cell);
+        if cells > 500_000.0 {
+            return Err(format!(
+                "{cells:.0} grid cells is more than 500000; use a larger cell"
+            ));
+        }
+        Ok(())
+    }
+
+    fn create(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {
+        let (amplitude_m, cell_m) = (spec.length_m("amplitude"), spec.length_m("cell"));
+        let (length_m, back_m, width_m) = (
+            spec.length_m("length"),
+            spec.length_m("back"),
+            spec.length_m("width"),
+        );
+        let columns = ((length_m + back_m) / cell_m).ceil().max(1.0) as usize;
+        let rows = (width_m / cell_m).ceil().max(1.0) as usize;
+        let mut rng = ChaCha8Rng::seed_from_u64(ctx.seed ^ ROUGH_STREAM);
+        let heights_m = (0..(columns + 1) * (rows + 1))
+            .map(|_| rng.random_range(-amplitude_m..=amplitude_m))
+            .collect();
+        let shape = Shape::Rough {
+            cell_m,
+            origin_m: [-back_m, -(rows as f64) * cell_m / 2.0],
+            columns,
+            rows,
+            heights_m,
+        };
+        Box::new(Relief::new(spec, shape, "length"))
+    }
+}

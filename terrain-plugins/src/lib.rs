@@ -129,6 +129,25 @@ impl Rect {
     }
 }
 
+/// Triangles of a static ground surface, for viewers.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GroundMesh {
+    /// vertices, world frame, metres
+    pub vertices_m: Vec<[f64; 3]>,
+    /// triangles as indices into `vertices_m`, counter-clockwise from above
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl GroundMesh {
+    /// Adds the quadrilateral a, b, c, d (counter-clockwise from above).
+    pub fn push_quad(&mut self, corners: [[f64; 3]; 4]) {
+        let first = self.vertices_m.len() as u32;
+        self.vertices_m.extend(corners);
+        self.triangles.push([first, first + 1, first + 2]);
+        self.triangles.push([first, first + 2, first + 3]);
+    }
+}
+
 /// A terrain in a physics world.
 ///
 /// Life cycle: a plugin creates it from a spec, [`Terrain::build`] inserts its
@@ -167,6 +186,12 @@ pub trait Terrain: Send {
     /// Side of one tile's top face and the distance between tile centres,
     /// metres; `None` for terrains without tiles.
     fn tile_geometry_m(&self) -> Option<(f64, f64)> {
+        None
+    }
+    /// The static ground's shape for viewers, where it is not the plane
+    /// z = 0 (relief): triangles in the world frame. Default: none (flat
+    /// ground; tiles are drawn from [`Terrain::tiles_in`]).
+    fn ground_mesh(&self) -> Option<GroundMesh> {
         None
     }
     /// Lines `quadwalk terrain show` prints after the regions: what else a

@@ -16,7 +16,8 @@ use crate::spec::{ParamDecl, ParamKind, ParamValue, TerrainSpec};
 use crate::tiles::GROUND_FRICTION;
 use crate::units::format_length;
 use crate::{
-    BuildContext, Rect, Region, Terrain, TerrainPlugin, TileState, terrain_collision_groups,
+    BuildContext, GroundMesh, Rect, Region, Terrain, TerrainPlugin, TileState,
+    terrain_collision_groups,
 };
 
 /// Stream of the `rough` height draw (mixed into the build seed).
@@ -255,6 +256,61 @@ impl Terrain for Relief {
 
     fn tile_count(&self) -> usize {
         0
+    }
+
+    fn ground_mesh(&self) -> Option<GroundMesh> {
+        let e = self.extent;
+        let (x0, x1, y0, y1) = (e.min_m[0], e.max_m[0], e.min_m[1], e.max_m[1]);
+        let mut mesh = GroundMesh::default();
+        match &self.shape {
+            Shape::Slope { .. } => mesh.push_quad([
+                [x0, y0, self.height_m(x0, y0)],
+                [x1, y0, self.height_m(x1, y0)],
+                [x1, y1, self.height_m(x1, y1)],
+                [x0, y1, self.height_m(x0, y1)],
+            ]),
+            Shape::Steps { height_m, length_m } => {
+                mesh.push_quad([[x0, y0, 0.0], [0.0, y0, 0.0], [0.0, y1, 0.0], [x0, y1, 0.0]]);
+                let steps = (x1 / length_m).ceil() as usize;
+                for k in 0..steps {
+                    let (a, b) = (k as f64 * length_m, ((k + 1) as f64 * length_m).min(x1));
+                    let z = k as f64 * height_m;
+                    if k > 0 {
+                        // the riser, facing -x
+                        let below = z - height_m;
+                        mesh.push_quad([[a, y1, below], [a, y0, below], [a, y0, z], [a, y1, z]]);
+                    }
+                    mesh.push_quad([[a, y0, z], [b, y0, z], [b, y1, z], [a, y1, z]]);
+                }
+            }
+            Shape::Rough {
+                cell_m,
+                origin_m,
+                columns,
+                rows,
+                heights_m,
+            } => {
+                for i in 0..=*columns {
+                    for j in 0..=*rows {
+                        mesh.vertices_m.push([
+                            origin_m[0] + i as f64 * cell_m,
+                            origin_m[1] + j as f64 * cell_m,
+                            heights_m[i * (rows + 1) + j],
+                        ]);
+                    }
+                }
+                let index = |i: usize, j: usize| (i * (rows + 1) + j) as u32;
+                for i in 0..*columns {
+                    for j in 0..*rows {
+                        mesh.triangles
+                            .push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
+                        mesh.triangles
+                            .push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
+                    }
+                }
+            }
+        }
+        Some(mesh)
     }
 
     fn details(&self) -> Vec<String> {

@@ -487,6 +487,36 @@ fn stand_streams_too() {
     assert!(!entities.contains(&"/world/goal"), "{entities:?}");
 }
 
+/// Relief is drawn as its ground mesh; flat ground and tiles have none.
+#[test]
+fn relief_streams_its_ground() {
+    for (spec, has_ground) in [
+        ("rough:1cm", true),
+        ("slope:5", true),
+        ("elastic:5cm", false),
+    ] {
+        let rrd = scratch(&format!("ground-{}.rrd", spec.replace(':', "_")));
+        let sink = format!("save:{}", rrd.display());
+        quadwalk_ok(&[
+            "stand",
+            "--terrain",
+            spec,
+            "--seconds",
+            "0.5",
+            "--rerun",
+            &sink,
+        ]);
+        let content = read_rrd(&rrd);
+        let entities = strings(&content["entities"]);
+        assert_eq!(
+            entities.contains(&"/world/terrain/ground"),
+            has_ground,
+            "{spec}: {entities:?}"
+        );
+        assert!(entities.contains(&"/world/robot/chassis"), "{entities:?}");
+    }
+}
+
 /// `bench --rerun` streams the world on thread 0 of the phase-rate
 /// measurement: 2 phases give 2 sets of curves.
 #[test]

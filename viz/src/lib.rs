@@ -20,6 +20,7 @@
 //! | `world/targets/landing` | `Points3D`: where the swing foot is sent | every phase start |
 //! | `world/terrain/tiles` | `Boxes3D`: the tiles near the robot, top face at the current sink, coloured by sink | every logged frame |
 //! | `world/terrain/regions` | `Boxes3D`: one flat box per terrain region, labelled, static | once |
+//! | `world/terrain/ground` | `Mesh3D`: the relief's ground (`slope`, `steps`, `rough`: `Terrain::ground_mesh`), static | once, for relief |
 //! | `world/contacts` | `Points3D`: ground contact points (feet green, other links red) | every logged frame |
 //! | `reward/<term>`, `reward/total` | `Scalars` | every phase end |
 //! | `base/height_m`, `base/roll_deg`, `base/pitch_deg` | `Scalars` | every logged frame |

@@ -179,7 +179,7 @@ impl RolloutLogger {
 
     /// Logs the terrain's regions (static) once.
     pub fn log_terrain(&mut self, terrain: &dyn Terrain) {
-        let Some(rec) = &self.rec else { return };
+        let Some(rec) = self.rec.clone() else { return };
         let extent = terrain.extent();
         let (y0, y1) = (extent.min_m[1], extent.max_m[1]);
         let mut centres = Vec::new();
@@ -198,6 +198,17 @@ impl RolloutLogger {
             .with_labels(labels)
             .with_colors(colours);
         self.check(rec.log_static("world/terrain/regions", &boxes));
+        if let Some(mesh) = terrain.ground_mesh() {
+            let vertices: Vec<[f32; 3]> = mesh
+                .vertices_m
+                .iter()
+                .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32])
+                .collect();
+            let ground = rerun::Mesh3D::new(vertices)
+                .with_triangle_indices(mesh.triangles)
+                .with_albedo_factor(rerun::Rgba32::from_rgb(150, 140, 120));
+            self.check(rec.log_static("world/terrain/ground", &ground));
+        }
     }
 
     /// Logs one frame of the task as it is now (the state after a reset,

@@ -797,3 +797,52 @@ fn the_shipped_policies_load_and_run() {
     }
     println!("{checked} shipped policies checked");
 }
+
+#[test]
+fn the_terrains_beyond_the_paper_train_roll_out_and_evaluate() {
+    let dir = scratch_dir("new-terrains");
+    for (k, (spec, region)) in [
+        (
+            "varying:2m:(soil:3cm),(rigid:friction=0.3),2..5cm",
+            "soil:3cm",
+        ),
+        ("rough:1cm:length=4m", "rough:1cm:length=4m"),
+        ("slope:5:length=4m", "slope:5:length=4m"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let config = tiny_variant(&dir, "spec = \"rigid\"", &format!("spec = \"{spec}\""));
+        let run = dir.join(format!("run-{k}"));
+        train_on_two_threads(&config, &run, "2");
+        let saved = std::fs::read_to_string(run.join("config.toml")).unwrap();
+        assert!(saved.contains(region), "{saved}");
+        let rollout = json_of(&[
+            "rollout",
+            "--policy",
+            s(&run),
+            "--terrain",
+            spec,
+            "--phases",
+            "2",
+            "--json",
+        ]);
+        assert_eq!(rollout["phases"], 2, "{spec}: {rollout}");
+        assert_eq!(rollout["regions"][0], region, "{spec}: {rollout}");
+        let out = dir.join(format!("eval-{k}"));
+        ok(&[
+            "eval",
+            "--policy",
+            s(&run),
+            "--terrain",
+            spec,
+            "--episodes",
+            "2",
+            "--phases",
+            "2",
+            "--out",
+            s(&out),
+        ]);
+        assert!(out.join("eval.json").is_file());
+    }
+}

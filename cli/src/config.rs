@@ -1041,6 +1041,19 @@ mod tests {
         let rigid = get("rigid");
         assert_eq!(rigid.task, default_task());
         assert_eq!(rigid.ppo, default_ppo());
+        // the 5 cm curriculum starts as the rigid recipe and deepens the tiles
+        let deepening = get("elastic-5cm-curriculum");
+        assert_eq!((&deepening.task, &deepening.ppo), (&rigid.task, &rigid.ppo));
+        let stages: Vec<String> = deepening
+            .curriculum
+            .iter()
+            .map(|s| s.terrain.to_string())
+            .collect();
+        assert_eq!(
+            stages,
+            ["rigid", "elastic:2cm", "elastic:3cm", "elastic:4cm", "elastic:5cm"]
+        );
+        assert_eq!(deepening.curriculum[0].iterations, rigid.train.iterations);
     }
 
     #[test]

@@ -1051,7 +1051,13 @@ mod tests {
             .collect();
         assert_eq!(
             stages,
-            ["rigid", "elastic:2cm", "elastic:3cm", "elastic:4cm", "elastic:5cm"]
+            [
+                "rigid",
+                "elastic:2cm",
+                "elastic:3cm",
+                "elastic:4cm",
+                "elastic:5cm"
+            ]
         );
         assert_eq!(deepening.curriculum[0].iterations, rigid.train.iterations);
     }

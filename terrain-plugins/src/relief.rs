@@ -22,6 +22,8 @@ use crate::{
 
 /// Stream of the `rough` height draw (mixed into the build seed).
 const ROUGH_STREAM: u64 = 0x726f_7567_6821;
+/// `rough`'s default grid spacing, m.
+pub const DEFAULT_CELL_M: f64 = 0.1;
 /// How far below its lowest point the relief's solid reaches, m.
 const BASE_DEPTH_M: f64 = 1.0;
 
@@ -57,6 +59,108 @@ fn extent_decls() -> Vec<ParamDecl> {
     ]
 }
 
+/// Heights on a grid of square cells, the ground of `rough` and of rough
+/// `varying` regions: a triangle mesh, two triangles per cell split along
+/// the diagonal from (x0, y0) to (x1, y1).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeightGrid {
+    /// cell side, m
+    pub cell_m: f64,
+    /// the grid's corner of smallest x and y, m
+    pub origin_m: [f64; 2],
+    /// cells along x
+    pub columns: usize,
+    /// cells along y
+    pub rows: usize,
+    /// (columns + 1) x (rows + 1) heights, row-major by x, m
+    pub heights_m: Vec<f64>,
+}
+
+impl HeightGrid {
+    /// A grid over [x0, x1] x [y0, y1] with heights drawn uniformly in
+    /// [-amplitude, amplitude] from `seed`.
+    pub fn random(
+        x_m: (f64, f64),
+        y_m: (f64, f64),
+        cell_m: f64,
+        amplitude_m: f64,
+        seed: u64,
+    ) -> Self {
+        let columns = ((x_m.1 - x_m.0) / cell_m).ceil().max(1.0) as usize;
+        let rows = ((y_m.1 - y_m.0) / cell_m).ceil().max(1.0) as usize;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ ROUGH_STREAM);
+        let heights_m = (0..(columns + 1) * (rows + 1))
+            .map(|_| rng.random_range(-amplitude_m..=amplitude_m))
+            .collect();
+        Self {
+            cell_m,
+            origin_m: [x_m.0, (y_m.0 + y_m.1) / 2.0 - rows as f64 * cell_m / 2.0],
+            columns,
+            rows,
+            heights_m,
+        }
+    }
+
+    /// The mesh's height at (x, y) (clamped to the grid), m.
+    pub fn height_m(&self, x_m: f64, y_m: f64) -> f64 {
+        let (columns, rows) = (self.columns, self.rows);
+        let gx = ((x_m - self.origin_m[0]) / self.cell_m).clamp(0.0, columns as f64);
+        let gy = ((y_m - self.origin_m[1]) / self.cell_m).clamp(0.0, rows as f64);
+        let (i, j) = ((gx as usize).min(columns - 1), (gy as usize).min(rows - 1));
+        let (fx, fy) = (gx - i as f64, gy - j as f64);
+        let h = |a: usize, b: usize| self.heights_m[a * (rows + 1) + b];
+        let (h00, h10, h01, h11) = (h(i, j), h(i + 1, j), h(i, j + 1), h(i + 1, j + 1));
+        if fx >= fy {
+            h00 + fx * (h10 - h00) + fy * (h11 - h10)
+        } else {
+            h00 + fy * (h01 - h00) + fx * (h11 - h01)
+        }
+    }
+
+    /// The lowest height, m.
+    pub fn lowest_m(&self) -> f64 {
+        self.heights_m.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+
+    /// The grid as triangles, world frame.
+    pub fn mesh(&self) -> GroundMesh {
+        let mut mesh = GroundMesh::default();
+        let rows = self.rows;
+        for i in 0..=self.columns {
+            for j in 0..=rows {
+                mesh.vertices_m.push([
+                    self.origin_m[0] + i as f64 * self.cell_m,
+                    self.origin_m[1] + j as f64 * self.cell_m,
+                    self.heights_m[i * (rows + 1) + j],
+                ]);
+            }
+        }
+        let index = |i: usize, j: usize| (i * (rows + 1) + j) as u32;
+        for i in 0..self.columns {
+            for j in 0..rows {
+                // counter-clockwise seen from above: normals point up
+                mesh.triangles
+                    .push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
+                mesh.triangles
+                    .push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
+            }
+        }
+        mesh
+    }
+
+    /// The mesh as a collider (friction and groups still to set).
+    pub fn collider(&self) -> ColliderBuilder {
+        let mesh = self.mesh();
+        let vertices = mesh
+            .vertices_m
+            .iter()
+            .map(|v| Vector::new(v[0] as f32, v[1] as f32, v[2] as f32))
+            .collect();
+        ColliderBuilder::trimesh(vertices, mesh.triangles)
+            .expect("a grid of at least one cell makes a valid mesh")
+    }
+}
+
 /// The shape of a relief.
 #[derive(Debug, Clone, PartialEq)]
 enum Shape {
@@ -64,14 +168,8 @@ enum Shape {
     Slope { tan: f64 },
     /// h = height floor(x / length) for 0 <= x, 0 behind
     Steps { height_m: f64, length_m: f64 },
-    /// heights on a grid of `cell_m` squares from (x0, y0), row-major by x
-    Rough {
-        cell_m: f64,
-        origin_m: [f64; 2],
-        columns: usize,
-        rows: usize,
-        heights_m: Vec<f64>,
-    },
+    /// heights on a grid
+    Rough(HeightGrid),
 }
 
 /// A rigid relief.
@@ -121,25 +219,7 @@ impl Relief {
                 let x = x_m.clamp(0.0, self.extent.max_m[0]);
                 height_m * (x / length_m).floor()
             }
-            Shape::Rough {
-                cell_m,
-                origin_m,
-                columns,
-                rows,
-                heights_m,
-            } => {
-                let gx = ((x_m - origin_m[0]) / cell_m).clamp(0.0, *columns as f64);
-                let gy = ((y_m - origin_m[1]) / cell_m).clamp(0.0, *rows as f64);
-                let (i, j) = ((gx as usize).min(columns - 1), (gy as usize).min(rows - 1));
-                let (fx, fy) = (gx - i as f64, gy - j as f64);
-                let h = |a: usize, b: usize| heights_m[a * (rows + 1) + b];
-                let (h00, h10, h01, h11) = (h(i, j), h(i + 1, j), h(i, j + 1), h(i + 1, j + 1));
-                if fx >= fy {
-                    h00 + fx * (h10 - h00) + fy * (h11 - h10)
-                } else {
-                    h00 + fy * (h01 - h00) + fx * (h11 - h01)
-                }
-            }
+            Shape::Rough(grid) => grid.height_m(x_m, y_m),
         }
     }
 
@@ -195,41 +275,13 @@ impl Terrain for Relief {
                     world.insert_collider(self.collider(block), Some(ground));
                 }
             }
-            Shape::Rough {
-                cell_m,
-                origin_m,
-                columns,
-                rows,
-                heights_m,
-            } => {
-                let mut vertices = Vec::with_capacity((columns + 1) * (rows + 1));
-                for i in 0..=*columns {
-                    for j in 0..=*rows {
-                        vertices.push(Vector::new(
-                            (origin_m[0] + i as f64 * cell_m) as f32,
-                            (origin_m[1] + j as f64 * cell_m) as f32,
-                            heights_m[i * (rows + 1) + j] as f32,
-                        ));
-                    }
-                }
-                let index = |i: usize, j: usize| (i * (rows + 1) + j) as u32;
-                let mut triangles = Vec::with_capacity(2 * columns * rows);
-                for i in 0..*columns {
-                    for j in 0..*rows {
-                        // counter-clockwise seen from above: normals point up
-                        triangles.push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
-                        triangles.push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
-                    }
-                }
-                let mesh = ColliderBuilder::trimesh(vertices, triangles)
-                    .expect("a grid of at least one cell makes a valid mesh");
-                world.insert_collider(self.collider(mesh), Some(ground));
+            Shape::Rough(grid) => {
+                world.insert_collider(self.collider(grid.collider()), Some(ground));
                 // a floor under the whole grid, and flat ground beyond it
-                let low = heights_m.iter().copied().fold(f64::INFINITY, f64::min);
                 let floor = ColliderBuilder::cuboid(100.0, 100.0, 0.5).translation(Vector::new(
                     0.0,
                     0.0,
-                    (low - 0.05 - 0.5) as f32,
+                    (grid.lowest_m() - 0.05 - 0.5) as f32,
                 ));
                 world.insert_collider(self.collider(floor), Some(ground));
             }
@@ -283,39 +335,14 @@ impl Terrain for Relief {
                     mesh.push_quad([[a, y0, z], [b, y0, z], [b, y1, z], [a, y1, z]]);
                 }
             }
-            Shape::Rough {
-                cell_m,
-                origin_m,
-                columns,
-                rows,
-                heights_m,
-            } => {
-                for i in 0..=*columns {
-                    for j in 0..=*rows {
-                        mesh.vertices_m.push([
-                            origin_m[0] + i as f64 * cell_m,
-                            origin_m[1] + j as f64 * cell_m,
-                            heights_m[i * (rows + 1) + j],
-                        ]);
-                    }
-                }
-                let index = |i: usize, j: usize| (i * (rows + 1) + j) as u32;
-                for i in 0..*columns {
-                    for j in 0..*rows {
-                        mesh.triangles
-                            .push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
-                        mesh.triangles
-                            .push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
-                    }
-                }
-            }
+            Shape::Rough(grid) => mesh = grid.mesh(),
         }
         Some(mesh)
     }
 
     fn details(&self) -> Vec<String> {
         match &self.shape {
-            Shape::Rough { heights_m, .. } => {
+            Shape::Rough(HeightGrid { heights_m, .. }) => {
                 let n = heights_m.len() as f64;
                 let mean = heights_m.iter().sum::<f64>() / n;
                 let rms = (heights_m.iter().map(|h| (h - mean).powi(2)).sum::<f64>() / n).sqrt();
@@ -451,7 +478,7 @@ impl TerrainPlugin for RoughPlugin {
             ParamDecl::optional(
                 "cell",
                 ParamKind::Length,
-                ParamValue::Length(0.1),
+                ParamValue::Length(DEFAULT_CELL_M),
                 "grid spacing, default 10cm",
             ),
             friction_decl(),
@@ -485,19 +512,14 @@ impl TerrainPlugin for RoughPlugin {
             spec.length_m("back"),
             spec.length_m("width"),
         );
-        let columns = ((length_m + back_m) / cell_m).ceil().max(1.0) as usize;
-        let rows = (width_m / cell_m).ceil().max(1.0) as usize;
-        let mut rng = ChaCha8Rng::seed_from_u64(ctx.seed ^ ROUGH_STREAM);
-        let heights_m = (0..(columns + 1) * (rows + 1))
-            .map(|_| rng.random_range(-amplitude_m..=amplitude_m))
-            .collect();
-        let shape = Shape::Rough {
+        let grid = HeightGrid::random(
+            (-back_m, length_m),
+            (-width_m / 2.0, width_m / 2.0),
             cell_m,
-            origin_m: [-back_m, -(rows as f64) * cell_m / 2.0],
-            columns,
-            rows,
-            heights_m,
-        };
+            amplitude_m,
+            ctx.seed,
+        );
+        let shape = Shape::Rough(grid);
         Box::new(Relief::new(spec, shape, "length"))
     }
 }

@@ -43,7 +43,7 @@ impl ParamKind {
             Self::Number => "a number such as 0.5",
             Self::Depth => "a depth such as 5cm, or a range such as 2..5cm",
             Self::Surfaces => {
-                "a list of depths, depth ranges and `rigid`, such as 2,3,4,5cm,rigid or 2..5cm,rigid"
+                "a list of depths, depth ranges, `rigid` and (spec)s of rigid, elastic, soil or rough ground, such as 2,3,4,5cm,rigid or 2..5cm,(soil:4cm),(rough:1cm)"
             }
         }
     }
@@ -69,13 +69,20 @@ pub enum Ground {
     },
     /// Tiles of soil that yield and stay down (see [`crate::soil`]).
     Soil(crate::soil::SoilParams),
+    /// Rigid ground with random heights (see [`crate::relief`]).
+    Rough {
+        /// heights are drawn uniformly in [-amplitude, amplitude], m
+        amplitude_m: f64,
+        /// grid spacing, m
+        cell_m: f64,
+    },
 }
 
 impl Ground {
     /// The deepest nominal sink of this ground, metres (0 for rigid).
     pub fn max_depth_m(&self) -> f64 {
         match *self {
-            Self::Rigid => 0.0,
+            Self::Rigid | Self::Rough { .. } => 0.0,
             Self::Elastic { depth_m } => depth_m,
             Self::ElasticRange { max_depth_m, .. } => max_depth_m,
             Self::Soil(soil) => soil.depth_m,
@@ -152,6 +159,17 @@ impl Surface {
                 }
             ),
             Ground::Soil(soil) => soil.to_string(),
+            Ground::Rough {
+                amplitude_m,
+                cell_m,
+            } => {
+                let cell = if cell_m == crate::relief::DEFAULT_CELL_M {
+                    String::new()
+                } else {
+                    format!(":cell={}", format_length(cell_m))
+                };
+                format!("rough:{}{cell}", format_length(amplitude_m))
+            }
         };
         match self.friction {
             Some(mu) => format!("{text}:friction={mu}"),
@@ -164,7 +182,15 @@ impl Surface {
     /// damping, tile_mass, length, back, width) is refused: a region takes
     /// those from the terrain it is part of.
     pub fn from_spec(spec: &TerrainSpec) -> Result<Self, String> {
-        const REGION_PARAMS: [&str; 5] = ["depth", "friction", "elastic", "yield", "recovery"];
+        const REGION_PARAMS: [&str; 7] = [
+            "depth",
+            "friction",
+            "elastic",
+            "yield",
+            "recovery",
+            "amplitude",
+            "cell",
+        ];
         if let Some((decl, _)) = spec
             .params()
             .find(|(d, v)| !REGION_PARAMS.contains(&d.name) && d.default.as_ref() != Some(*v))
@@ -185,9 +211,13 @@ impl Surface {
                 Self::from_depth_range(min_m, max_m).ground
             }
             "soil" => Ground::Soil(crate::soil::SoilParams::from_spec(spec)),
+            "rough" => Ground::Rough {
+                amplitude_m: spec.length_m("amplitude"),
+                cell_m: spec.length_m("cell"),
+            },
             other => {
                 return Err(format!(
-                    "a region is rigid, elastic or soil ground, not {other}"
+                    "a region is rigid, elastic, soil or rough ground, not {other}"
                 ));
             }
         };
@@ -388,6 +418,7 @@ fn surface_registry() -> crate::Registry {
         Box::new(crate::rigid::RigidPlugin) as Box<dyn crate::TerrainPlugin>,
         Box::new(crate::elastic::ElasticPlugin),
         Box::new(crate::soil::SoilPlugin),
+        Box::new(crate::relief::RoughPlugin),
     ] {
         registry
             .register(plugin)
@@ -407,9 +438,9 @@ fn parse_nested_surface(item: &str) -> Result<Surface, String> {
         .transpose()?
         .unwrap_or(item);
     let plugin = inner.split(':').next().unwrap_or_default().trim();
-    if !["rigid", "elastic", "soil"].contains(&plugin) {
+    if !["rigid", "elastic", "soil", "rough"].contains(&plugin) {
         return Err(format!(
-            "item {item:?}: a region is rigid, elastic or soil ground, not {plugin:?}"
+            "item {item:?}: a region is rigid, elastic, soil or rough ground, not {plugin:?}"
         ));
     }
     let spec = surface_registry()

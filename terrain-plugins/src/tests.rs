@@ -65,6 +65,10 @@ fn display_is_canonical_and_round_trips() {
         ),
         ("varying:2m:(elastic:5cm),(rigid)", "varying:2m:5cm,rigid"),
         (
+            "varying:2m:(rough:10mm),(rough:2cm:cell=5cm),5cm",
+            "varying:2m:(rough:1cm),(rough:2cm:cell=5cm),5cm",
+        ),
+        (
             "varying:2m:(elastic:2..5cm:friction=0.4),(soil:3cm:elastic=5mm:recovery=4)",
             "varying:2m:(elastic:2cm..5cm:friction=0.4),(soil:3cm:elastic=5mm:recovery=4)",
         ),
@@ -152,7 +156,15 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ),
         (
             "varying:2m:(varying:1m:2cm)",
-            "a region is rigid, elastic or soil ground",
+            "a region is rigid, elastic, soil or rough ground",
+        ),
+        (
+            "varying:2m:5cm,(slope:5)",
+            "a region is rigid, elastic, soil or rough ground",
+        ),
+        (
+            "varying:2m:(rough:1cm:length=4m)",
+            "belongs to the whole terrain",
         ),
         ("varying:2m:(soil:4cm", "unbalanced parentheses"),
         ("varying:2m:5cm,(soil:30cm)", "beyond the tile travel"),
@@ -692,6 +704,10 @@ fn ball_rest_m(spec: &str, seed: u64, x: f64, y: f64) -> f64 {
 #[test]
 fn relief_surfaces_are_where_their_colliders_are() {
     for (spec, points) in [
+        (
+            "varying:2m:(rough:2cm),rigid",
+            vec![(0.0, 0.0), (0.33, 0.41), (1.27, -0.88), (-1.23, 1.1)],
+        ),
         (
             "slope:10",
             vec![(0.0, 0.0), (1.0, 0.3), (-1.5, -0.5), (7.3, 1.0)],

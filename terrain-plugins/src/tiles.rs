@@ -31,21 +31,23 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rapier3d::prelude::*;
 
+use crate::relief::HeightGrid;
 use crate::soil::SoilModel;
 use crate::spec::{Ground, ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
 use crate::units::format_length;
-use crate::{BuildContext, Rect, Region, Terrain, TileState, terrain_collision_groups};
+use crate::{BuildContext, GroundMesh, Rect, Region, Terrain, TileState, terrain_collision_groups};
 
 /// Thickness of a tile, metres.
-///
-/// Friction: every terrain collider combines its friction with the robot's
-/// by the minimum (rapier's `CoefficientCombineRule::Min`), so a terrain's
-/// `friction=<mu>` is the contact's coefficient (the robot's feet have 1.0).
 pub const TILE_THICKNESS_M: f64 = 0.05;
-/// Friction coefficient of tile and ground surfaces (the Laikago model's
-/// lateral friction is 1.0 too).
+/// Default friction coefficient of tile and ground surfaces (the Laikago
+/// model's lateral friction is 1.0 too). Every terrain collider combines its
+/// friction with the robot's by the minimum (rapier's
+/// `CoefficientCombineRule::Min`), so a terrain's `friction=<mu>` is the
+/// contact's coefficient.
 pub const GROUND_FRICTION: f32 = 1.0;
 
+/// Seed offset between the height draws of rough regions.
+const ROUGH_REGION_STRIDE: u64 = 0x9e37_79b9_7f4a_7c15;
 /// Stream of the per-tile depth draw (mixed into the build seed).
 const TILE_DEPTH_STREAM: u64 = 0x7469_6c65_2d64_6570;
 
@@ -235,6 +237,8 @@ enum RegionModel {
         model: SoilModel,
         damping_n_s_per_m: f64,
     },
+    /// no tiles: rigid ground with random heights (its grid in `grids`)
+    Rough,
 }
 
 /// One tile's spring, fixed when the terrain is laid out.
@@ -269,6 +273,8 @@ pub struct TiledTerrain {
     models: Vec<RegionModel>,
     /// each region's friction coefficient
     frictions: Vec<f64>,
+    /// each rough region's height grid
+    grids: Vec<Option<HeightGrid>>,
     /// one entry per cell, row-major by column: `None` for rigid cells
     cell_springs: Vec<Option<TileSpring>>,
     /// region index of each column
@@ -330,6 +336,8 @@ impl TiledTerrain {
         let half = pitch / 2.0;
         let mut regions = Vec::new();
         let mut models = Vec::new();
+        let mut grids = Vec::new();
+        let half_width_m = rows as f64 * pitch / 2.0;
         let frictions: Vec<f64> = region_surfaces
             .iter()
             .map(|s| s.friction.unwrap_or(params.friction))
@@ -344,8 +352,26 @@ impl TiledTerrain {
             };
             // What `terrain show` reports: for a range, the springs of its
             // middle depth.
+            let mut grid = None;
             let (label, model, reported, expected_sink_m) = match surface.ground {
                 Ground::Rigid => (surface.label(), RegionModel::Rigid, None, 0.0),
+                Ground::Rough {
+                    amplitude_m,
+                    cell_m,
+                } => {
+                    // each rough region its own draw
+                    let seed = ctx
+                        .seed
+                        .wrapping_add((index as u64 + 1).wrapping_mul(ROUGH_REGION_STRIDE));
+                    grid = Some(HeightGrid::random(
+                        x_range_m,
+                        (-half_width_m, half_width_m),
+                        cell_m,
+                        amplitude_m,
+                        seed,
+                    ));
+                    (surface.label(), RegionModel::Rough, None, 0.0)
+                }
                 Ground::Elastic { depth_m } => {
                     let (k, c) = spring_at(depth_m);
                     (
@@ -396,6 +422,7 @@ impl TiledTerrain {
                 expected_sink_m,
             });
             models.push(model);
+            grids.push(grid);
         }
 
         // Each cell's spring; a depth range draws one per tile, in cell
@@ -406,7 +433,7 @@ impl TiledTerrain {
         for &region in &column_region {
             for _ in 0..rows {
                 let spring = match models[region] {
-                    RegionModel::Rigid => None,
+                    RegionModel::Rigid | RegionModel::Rough => None,
                     RegionModel::Elastic {
                         stiffness_n_per_m,
                         damping_n_s_per_m,
@@ -447,6 +474,7 @@ impl TiledTerrain {
             regions,
             models,
             frictions,
+            grids,
             cell_springs,
             column_region,
             columns,
@@ -559,20 +587,38 @@ impl Terrain for TiledTerrain {
 
         // Rigid regions: one solid block per region, top at z = 0.
         let depth_below = p.travel_m + TILE_THICKNESS_M;
-        for ((region, model), friction) in
-            self.regions.iter().zip(&self.models).zip(&self.frictions)
+        for (((region, model), friction), grid) in self
+            .regions
+            .iter()
+            .zip(&self.models)
+            .zip(&self.frictions)
+            .zip(&self.grids)
         {
-            if matches!(model, RegionModel::Rigid) {
+            if matches!(model, RegionModel::Rigid | RegionModel::Rough) {
+                // Rough ground: its mesh, over a block that stops just below it.
+                let top_m = match grid {
+                    Some(grid) => {
+                        let mesh = grid
+                            .collider()
+                            .friction(*friction as f32)
+                            .friction_combine_rule(CoefficientCombineRule::Min)
+                            .collision_groups(terrain_collision_groups());
+                        world.insert_collider(mesh, Some(base));
+                        grid.lowest_m() - 0.01
+                    }
+                    None => 0.0,
+                };
                 let (x0, x1) = region.x_range_m;
+                let thickness_m = depth_below + top_m;
                 let block = ColliderBuilder::cuboid(
                     ((x1 - x0) / 2.0) as f32,
                     ((extent.max_m[1] - extent.min_m[1]) / 2.0) as f32,
-                    (depth_below / 2.0) as f32,
+                    (thickness_m / 2.0) as f32,
                 )
                 .translation(Vector::new(
                     ((x0 + x1) / 2.0) as f32,
                     0.0,
-                    (-depth_below / 2.0) as f32,
+                    (top_m - thickness_m / 2.0) as f32,
                 ))
                 .friction(*friction as f32)
                 .friction_combine_rule(CoefficientCombineRule::Min)
@@ -743,7 +789,9 @@ impl Terrain for TiledTerrain {
             None => self.base_top_m(),
             Some((ix, iy)) => match self.tiles.get(ix * self.rows + iy).copied().flatten() {
                 Some(tile) => -self.tile_sink_m(world, tile.body),
-                None => 0.0,
+                None => self.grids[self.column_region[ix]]
+                    .as_ref()
+                    .map_or(0.0, |grid| grid.height_m(x_m, y_m)),
             },
         }
     }
@@ -812,6 +860,19 @@ impl Terrain for TiledTerrain {
 
     fn tile_geometry_m(&self) -> Option<(f64, f64)> {
         Some((self.params.pitch_m - self.params.gap_m, self.params.pitch_m))
+    }
+
+    /// The rough regions' ground, if any.
+    fn ground_mesh(&self) -> Option<GroundMesh> {
+        let mut all = GroundMesh::default();
+        for grid in self.grids.iter().flatten() {
+            let mesh = grid.mesh();
+            let first = all.vertices_m.len() as u32;
+            all.vertices_m.extend(mesh.vertices_m);
+            all.triangles
+                .extend(mesh.triangles.iter().map(|t| t.map(|i| i + first)));
+        }
+        (!all.triangles.is_empty()).then_some(all)
     }
 
     /// A depth range's draw (smallest, mean and largest tile depth) and a

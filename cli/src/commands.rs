@@ -62,7 +62,7 @@ pub fn make_world(
         seed,
         ..BuildContext::default()
     };
-    let terrain = create_terrain(registry, spec, &ctx)?;
+    let terrain = registry.create_from_spec(spec, &ctx)?;
     let extent = terrain.extent();
     if !extent.contains(xy_m) {
         anyhow::bail!(
@@ -77,23 +77,6 @@ pub fn make_world(
     }
     World::new(model, terrain, physics.clone(), xy_m)
         .with_context(|| format!("cannot place the robot on {spec}"))
-}
-
-/// The terrain `spec` describes, made by `registry`'s plugin of its name.
-/// A spec parsed by another registry (e.g. read back from a checkpoint made
-/// by a binary with more plugins) names the missing plugin.
-pub fn create_terrain(
-    registry: &Registry,
-    spec: &TerrainSpec,
-    ctx: &BuildContext,
-) -> Result<Box<dyn terrain_plugins::Terrain>> {
-    if registry.get(spec.plugin()).is_none() {
-        // Parsing the text again gives the registry's own error, which names
-        // the plugin and says how to register it.
-        registry.parse(&spec.to_string())?;
-        anyhow::bail!("terrain {spec}: no plugin named {:?}", spec.plugin());
-    }
-    Ok(registry.create_from_spec(spec, ctx))
 }
 
 pub fn terrain_list(registry: &Registry) -> Result<()> {
@@ -126,7 +109,7 @@ pub fn terrain_show(
         seed,
         ..BuildContext::default()
     };
-    let terrain = create_terrain(registry, &spec, &ctx)?;
+    let terrain = registry.create_from_spec(&spec, &ctx)?;
     if as_json {
         let e = terrain.extent();
         let regions: Vec<_> = terrain

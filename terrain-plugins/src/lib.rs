@@ -26,7 +26,10 @@ pub mod units;
 pub mod varying;
 
 pub use rapier3d;
-use rapier3d::prelude::{Group, InteractionGroups, InteractionTestMode, PhysicsWorld};
+use rapier3d::prelude::{
+    CoefficientCombineRule, ColliderBuilder, Group, InteractionGroups, InteractionTestMode,
+    PhysicsWorld,
+};
 pub use registry::{Registry, RegistryError, TerrainPlugin};
 pub use spec::{ParamDecl, ParamKind, ParamValue, SpecError, Surface, TerrainSpec};
 
@@ -42,6 +45,17 @@ pub const ROBOT_GROUP: Group = Group::GROUP_2;
 /// base they hang from.
 pub fn terrain_collision_groups() -> InteractionGroups {
     InteractionGroups::new(TERRAIN_GROUP, ROBOT_GROUP, InteractionTestMode::And)
+}
+
+/// A terrain surface collider: in [`terrain_collision_groups`], with
+/// friction coefficient `friction` combined with the robot's by the minimum
+/// (rapier's `CoefficientCombineRule::Min`), so that `friction` is the
+/// contact's coefficient wherever it is below the robot's 1.0.
+pub fn terrain_collider(builder: ColliderBuilder, friction: f64) -> ColliderBuilder {
+    builder
+        .friction(friction as f32)
+        .friction_combine_rule(CoefficientCombineRule::Min)
+        .collision_groups(terrain_collision_groups())
 }
 
 /// Robot colliders meet the terrain only (no self-collision).

@@ -262,16 +262,25 @@ impl Registry {
     /// Parses and creates in one go.
     pub fn create(&self, input: &str, ctx: &BuildContext) -> Result<Box<dyn Terrain>, SpecError> {
         let spec = self.parse(input)?;
-        Ok(self.create_from_spec(&spec, ctx))
+        self.create_from_spec(&spec, ctx)
     }
 
-    /// Creates the terrain a parsed spec describes. Panics if the spec's
-    /// plugin is not in this registry (a spec comes from a registry's parse).
-    pub fn create_from_spec(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {
+    /// Creates the terrain a parsed spec describes. A spec parsed by another
+    /// registry whose plugin this one lacks (a run made by a binary with
+    /// more plugins) is [`SpecError::UnknownPlugin`], naming the plugin.
+    pub fn create_from_spec(
+        &self,
+        spec: &TerrainSpec,
+        ctx: &BuildContext,
+    ) -> Result<Box<dyn Terrain>, SpecError> {
         let plugin = self
             .get(spec.plugin())
-            .unwrap_or_else(|| panic!("terrain spec {spec} was parsed by another registry"));
-        plugin.create(spec, ctx)
+            .ok_or_else(|| SpecError::UnknownPlugin {
+                input: spec.to_string(),
+                name: spec.plugin().to_string(),
+                known: self.known(),
+            })?;
+        Ok(plugin.create(spec, ctx))
     }
 }
 

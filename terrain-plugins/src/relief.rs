@@ -13,11 +13,10 @@ use rand_chacha::ChaCha8Rng;
 use rapier3d::prelude::*;
 
 use crate::spec::{ParamDecl, ParamKind, ParamValue, TerrainSpec};
-use crate::tiles::GROUND_FRICTION;
+use crate::tiles::friction_decl;
 use crate::units::format_length;
 use crate::{
-    BuildContext, GroundMesh, Rect, Region, Terrain, TerrainPlugin, TileState,
-    terrain_collision_groups,
+    BuildContext, GroundMesh, Rect, Region, Terrain, TerrainPlugin, TileState, terrain_collider,
 };
 
 /// Stream of the `rough` height draw (mixed into the build seed).
@@ -26,15 +25,6 @@ const ROUGH_STREAM: u64 = 0x726f_7567_6821;
 pub const DEFAULT_CELL_M: f64 = 0.1;
 /// How far below its lowest point the relief's solid reaches, m.
 const BASE_DEPTH_M: f64 = 1.0;
-
-fn friction_decl() -> ParamDecl {
-    ParamDecl::optional(
-        "friction",
-        ParamKind::Number,
-        ParamValue::Number(f64::from(GROUND_FRICTION)),
-        "friction coefficient of the ground (the contact's, min with the robot's 1.0), default 1",
-    )
-}
 
 fn extent_decls() -> Vec<ParamDecl> {
     vec![
@@ -224,10 +214,7 @@ impl Relief {
     }
 
     fn collider(&self, builder: ColliderBuilder) -> ColliderBuilder {
-        builder
-            .friction(self.friction as f32)
-            .friction_combine_rule(CoefficientCombineRule::Min)
-            .collision_groups(terrain_collision_groups())
+        terrain_collider(builder, self.friction)
     }
 }
 

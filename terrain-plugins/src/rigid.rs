@@ -3,11 +3,9 @@
 
 use rapier3d::prelude::*;
 
-use crate::spec::{ParamDecl, ParamKind, ParamValue, TerrainSpec};
-use crate::tiles::GROUND_FRICTION;
-use crate::{
-    BuildContext, Rect, Region, Terrain, TerrainPlugin, TileState, terrain_collision_groups,
-};
+use crate::spec::{ParamDecl, TerrainSpec};
+use crate::tiles::friction_decl;
+use crate::{BuildContext, Rect, Region, Terrain, TerrainPlugin, TileState, terrain_collider};
 
 /// Half side of the ground's extent, metres (the collider itself is an
 /// infinite half-space).
@@ -26,12 +24,7 @@ impl TerrainPlugin for RigidPlugin {
     }
 
     fn params(&self) -> Vec<ParamDecl> {
-        vec![ParamDecl::optional(
-            "friction",
-            ParamKind::Number,
-            ParamValue::Number(f64::from(GROUND_FRICTION)),
-            "friction coefficient of the ground (the contact's, min with the robot's 1.0), default 1",
-        )]
+        vec![friction_decl()]
     }
 
     fn create(&self, spec: &TerrainSpec, _ctx: &BuildContext) -> Box<dyn Terrain> {
@@ -64,10 +57,10 @@ impl Terrain for RigidGround {
 
     fn build(&mut self, world: &mut PhysicsWorld) {
         let ground = world.insert_body(RigidBodyBuilder::fixed());
-        let plane = ColliderBuilder::halfspace(rapier3d::na::Unit::new_unchecked(Vector::Z))
-            .friction(self.friction as f32)
-            .friction_combine_rule(CoefficientCombineRule::Min)
-            .collision_groups(terrain_collision_groups());
+        let plane = terrain_collider(
+            ColliderBuilder::halfspace(rapier3d::na::Unit::new_unchecked(Vector::Z)),
+            self.friction,
+        );
         world.insert_collider(plane, Some(ground));
     }
 

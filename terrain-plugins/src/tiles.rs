@@ -35,7 +35,7 @@ use crate::relief::HeightGrid;
 use crate::soil::SoilModel;
 use crate::spec::{Ground, ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
 use crate::units::format_length;
-use crate::{BuildContext, GroundMesh, Rect, Region, Terrain, TileState, terrain_collision_groups};
+use crate::{BuildContext, GroundMesh, Rect, Region, Terrain, TileState, terrain_collider};
 
 /// Thickness of a tile, metres.
 pub const TILE_THICKNESS_M: f64 = 0.05;
@@ -50,6 +50,17 @@ pub const GROUND_FRICTION: f32 = 1.0;
 const ROUGH_REGION_STRIDE: u64 = 0x9e37_79b9_7f4a_7c15;
 /// Stream of the per-tile depth draw (mixed into the build seed).
 const TILE_DEPTH_STREAM: u64 = 0x7469_6c65_2d64_6570;
+
+/// The optional `friction` parameter of every built-in terrain but
+/// `varying`'s regions' own (see [`GROUND_FRICTION`]).
+pub fn friction_decl() -> ParamDecl {
+    ParamDecl::optional(
+        "friction",
+        ParamKind::Number,
+        ParamValue::Number(f64::from(GROUND_FRICTION)),
+        "friction coefficient of the ground (the contact's, min with the robot's 1.0), default 1",
+    )
+}
 
 /// The optional parameters every tiled terrain takes, with their defaults.
 pub fn tile_param_decls() -> Vec<ParamDecl> {
@@ -86,12 +97,7 @@ pub fn tile_param_decls() -> Vec<ParamDecl> {
             V::Mass(0.5),
             "mass of one tile, default 0.5kg",
         ),
-        ParamDecl::optional(
-            "friction",
-            Number,
-            V::Number(f64::from(GROUND_FRICTION)),
-            "friction coefficient of the tiles and the ground (the contact's, min with the robot's 1.0), default 1",
-        ),
+        friction_decl(),
         ParamDecl::optional(
             "length",
             Length,
@@ -574,16 +580,13 @@ impl Terrain for TiledTerrain {
         let margin = 50.0;
         let half_x = (extent.max_m[0] - extent.min_m[0]) / 2.0 + margin;
         let half_y = (extent.max_m[1] - extent.min_m[1]) / 2.0 + margin;
-        let floor = ColliderBuilder::cuboid(half_x as f32, half_y as f32, 0.5)
-            .translation(Vector::new(
+        let floor =
+            ColliderBuilder::cuboid(half_x as f32, half_y as f32, 0.5).translation(Vector::new(
                 ((extent.min_m[0] + extent.max_m[0]) / 2.0) as f32,
                 0.0,
                 (base_top - 0.5) as f32,
-            ))
-            .friction(p.friction as f32)
-            .friction_combine_rule(CoefficientCombineRule::Min)
-            .collision_groups(terrain_collision_groups());
-        world.insert_collider(floor, Some(base));
+            ));
+        world.insert_collider(terrain_collider(floor, p.friction), Some(base));
 
         // Rigid regions: one solid block per region, top at z = 0.
         let depth_below = p.travel_m + TILE_THICKNESS_M;
@@ -598,12 +601,10 @@ impl Terrain for TiledTerrain {
                 // Rough ground: its mesh, over a block that stops just below it.
                 let top_m = match grid {
                     Some(grid) => {
-                        let mesh = grid
-                            .collider()
-                            .friction(*friction as f32)
-                            .friction_combine_rule(CoefficientCombineRule::Min)
-                            .collision_groups(terrain_collision_groups());
-                        world.insert_collider(mesh, Some(base));
+                        world.insert_collider(
+                            terrain_collider(grid.collider(), *friction),
+                            Some(base),
+                        );
                         grid.lowest_m() - 0.01
                     }
                     None => 0.0,
@@ -619,11 +620,8 @@ impl Terrain for TiledTerrain {
                     ((x0 + x1) / 2.0) as f32,
                     0.0,
                     (top_m - thickness_m / 2.0) as f32,
-                ))
-                .friction(*friction as f32)
-                .friction_combine_rule(CoefficientCombineRule::Min)
-                .collision_groups(terrain_collision_groups());
-                world.insert_collider(block, Some(base));
+                ));
+                world.insert_collider(terrain_collider(block, *friction), Some(base));
             }
         }
 
@@ -650,11 +648,9 @@ impl Terrain for TiledTerrain {
                     (side / 2.0) as f32,
                     (TILE_THICKNESS_M / 2.0) as f32,
                 )
-                .mass(p.tile_mass_kg as f32)
-                .friction(self.frictions[self.column_region[ix]] as f32)
-                .friction_combine_rule(CoefficientCombineRule::Min)
-                .collision_groups(terrain_collision_groups());
-                world.insert_collider(collider, Some(handle));
+                .mass(p.tile_mass_kg as f32);
+                let friction = self.frictions[self.column_region[ix]];
+                world.insert_collider(terrain_collider(collider, friction), Some(handle));
                 // Spring target above rest so that at q = 0 the spring holds the tile's weight.
                 let preload_m = p.tile_mass_kg * g / s.stiffness_n_per_m;
                 let joint = PrismaticJointBuilder::new(Vector::Z)

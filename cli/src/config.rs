@@ -1140,10 +1140,10 @@ mod tests {
         let c = terrain_from_toml("[terrain]\nplugin = \"varying\"\nevery = \"2m\"\nsurfaces = [\"2cm\", \"5cm\", \"rigid\"]\ndamping = 0.4\n", "c.toml").unwrap();
         assert_eq!(c.to_string(), "varying:2m:2cm,5cm,rigid:damping=0.4");
         // Regions of any surface spec: parentheses optional in a TOML list.
-        let d = terrain_from_toml("[terrain]\nplugin = \"varying\"\nevery = \"2m\"\nsurfaces = [\"5cm\", \"soil:4cm:yield=0.4\", \"(rigid:friction=0.1)\"]\n", "d.toml").unwrap();
+        let d = terrain_from_toml("[terrain]\nplugin = \"varying\"\nevery = \"2m\"\nsurfaces = [\"5cm\", \"soil:4cm:yield=0.4\", \"(rigid:friction=0.1)\", \"steps:5cm:30cm\", \"slope:10\"]\n", "d.toml").unwrap();
         assert_eq!(
             d.to_string(),
-            "varying:2m:5cm,(soil:4cm:yield=0.4),(rigid:friction=0.1)"
+            "varying:2m:5cm,(soil:4cm:yield=0.4),(rigid:friction=0.1),(steps:5cm:30cm),(slope:10)"
         );
         let written = format!("[terrain]\nspec = \"{d}\"\n");
         assert_eq!(terrain_from_toml(&written, "e.toml").unwrap(), d);

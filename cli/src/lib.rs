@@ -52,6 +52,13 @@ use std::sync::Arc;
 use clap::{Parser, Subcommand};
 pub use terrain_plugins::{Registry, RegistryError, TerrainPlugin};
 
+/// What other front ends (the Python package) share with the commands: an
+/// experiment file's settings, building a world the way `rollout` does, and
+/// running a checkpoint.
+pub use commands::make_world;
+pub use config::Experiment;
+pub use policy::Policy;
+
 /// The command line with its terrain plugins: build it, add plugins, run it.
 pub struct App {
     registry: Registry,

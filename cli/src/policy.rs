@@ -15,6 +15,7 @@ pub enum Policy {
     Scripted(ScriptedCrawl),
     /// a trained checkpoint or exported policy (PPO or SAC), mean action
     Trained {
+        /// the networks, loaded for acting
         learner: Box<learn::Learner>,
         /// the task settings the policy was trained with (its observation
         /// layout and action prior)

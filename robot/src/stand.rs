@@ -12,7 +12,8 @@ pub struct StandReport {
     pub seconds: f64,
     /// physics steps
     pub steps: u64,
-    /// base height above the terrain's resting surface (z = 0) at the end, m
+    /// base height above the terrain's resting surface right below it (z = 0
+    /// on flat ground) at the end, m
     pub base_height_m: f64,
     /// max minus min base height over the settled window, m
     pub base_height_drift_m: f64,
@@ -65,7 +66,7 @@ pub fn stand_observed(
             let feet = world.feet_in_world_m();
             let sink: f64 = feet
                 .iter()
-                .map(|f| -world.surface_height_m(f.x, f.y))
+                .map(|f| world.rest_height_m(f.x, f.y) - world.surface_height_m(f.x, f.y))
                 .sum::<f64>()
                 / 4.0;
             sink_sum += sink;
@@ -78,7 +79,7 @@ pub fn stand_observed(
     StandReport {
         seconds: steps as f64 * crate::DT_SECS,
         steps,
-        base_height_m: base.z,
+        base_height_m: base.z - world.rest_height_m(base.x, base.y),
         base_height_drift_m: max_h - min_h,
         max_tilt_deg: max_tilt_rad.to_degrees(),
         mean_loaded_sink_m: sink_sum / sink_samples.max(1) as f64,
@@ -191,6 +192,38 @@ mod tests {
             );
             assert!(r.max_tilt_deg < 5.0, "{spec}: {r:?}");
             assert!(r.non_foot_contacts.is_empty(), "{spec}: {r:?}");
+        }
+    }
+
+    #[test]
+    fn stands_on_a_hill_and_on_stairs_without_sinking_or_sliding() {
+        // Region 0 of these runs over [-1.9, 1.9] m: a hill 33 cm high at
+        // x = 0, stairs with their top tread over [-0.1, 0.1]. Sinks and
+        // heights are measured from the relief, not from z = 0.
+        let tan = 10f64.to_radians().tan();
+        for (spec, xy) in [
+            ("varying:2m:(slope:10)", [0.5, 0.0]),
+            ("varying:2m:(steps:5cm:60cm)", [0.0, 0.0]),
+        ] {
+            let mut world = world_on(spec, xy, WorldConfig::default());
+            // placed level above the relief, it lands and settles first
+            let landing = stand(&mut world, 2.0);
+            assert!(landing.non_foot_contacts.is_empty(), "{spec}: {landing:?}");
+            let start = world.base_pose().translation.vector;
+            let r = stand(&mut world, 4.0);
+            let end = world.base_pose().translation.vector;
+            println!("{spec}: {r:?}");
+            assert!(r.mean_loaded_sink_m.abs() < 0.002, "{spec}: {r:?}");
+            assert!(r.non_foot_contacts.is_empty(), "{spec}: {r:?}");
+            assert!(r.base_height_drift_m < 0.005, "{spec}: {r:?}");
+            let slid_m = (end.xy() - start.xy()).norm();
+            assert!(slid_m < 0.005, "{spec}: slid {slid_m} m in 4 s");
+            // above its ground about as on flat ground (0.38 m); on the hill
+            // the feet stand up to 0.25 m x tan(10 deg) below the base's point
+            assert!(
+                (r.base_height_m - 0.38).abs() < 0.03 + 0.25 * tan,
+                "{spec}: {r:?}"
+            );
         }
     }
 }

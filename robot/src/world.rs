@@ -639,6 +639,11 @@ impl World {
         self.terrain.surface_height_m(&self.physics, x_m, y_m)
     }
 
+    /// Height of the terrain surface right below (x, y) with nothing on it, m.
+    pub fn rest_height_m(&self, x_m: f64, y_m: f64) -> f64 {
+        self.terrain.rest_height_m(x_m, y_m)
+    }
+
     fn multibody(&self) -> &Multibody {
         self.physics
             .multibody_joints

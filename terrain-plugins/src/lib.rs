@@ -186,6 +186,12 @@ pub trait Terrain: Send {
     fn reset(&mut self, _world: &mut PhysicsWorld) {}
     /// Height of the surface right below (x, y), world frame, metres.
     fn surface_height_m(&self, world: &PhysicsWorld, x_m: f64, y_m: f64) -> f64;
+    /// Height of the surface right below (x, y) with nothing on it (every
+    /// tile at rest), world frame, metres: what a sink is measured from.
+    /// Default: 0, flat ground whose top is z = 0 (relief overrides it).
+    fn rest_height_m(&self, _x_m: f64, _y_m: f64) -> f64 {
+        0.0
+    }
     /// The terrain's regions, ordered along x.
     fn regions(&self) -> &[Region];
     /// Index of the region (x, y) lies in.

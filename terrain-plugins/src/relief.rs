@@ -151,6 +151,177 @@ impl HeightGrid {
     }
 }
 
+/// How far a region's relief solid reaches below z = 0, m (it overlaps the
+/// region's block, whose top is 1 cm below the relief's lowest point).
+const REGION_SOLID_BOTTOM_M: f64 = -0.02;
+
+/// The rigid relief of one `varying` region, over its x range and the
+/// field's width. Hills and stairs start and end at z = 0, so that regions
+/// join without a step (legged_gym's pyramid terrains, along x only).
+#[derive(Debug, Clone, PartialEq)]
+pub enum RegionRelief {
+    /// random heights (`rough`)
+    Grid(HeightGrid),
+    /// `slope`: h = tan(angle) min(x - x0, x1 - x), up to the region's
+    /// middle and down to its end
+    Hill {
+        /// the region's ends along x, m
+        x_m: (f64, f64),
+        /// the field's sides, m
+        y_m: (f64, f64),
+        /// tangent of the inclination
+        tan: f64,
+    },
+    /// `steps`: h = height min(floor((x - x0) / run), floor((x1 - x) / run),
+    /// levels), stairs up to the region's middle and down to its end;
+    /// `levels` is the most steps whose top tread keeps a positive length,
+    /// ceil((x1 - x0) / (2 run)) - 1
+    Stairs {
+        /// the region's ends along x, m
+        x_m: (f64, f64),
+        /// the field's sides, m
+        y_m: (f64, f64),
+        /// rise of each step, m
+        height_m: f64,
+        /// run of each step, m
+        length_m: f64,
+    },
+}
+
+impl RegionRelief {
+    /// Steps up (and down) of a region `region_length_m` long whose steps
+    /// run `length_m`: ceil(region / (2 run)) - 1, at least 0.
+    pub fn stair_levels(region_length_m: f64, length_m: f64) -> usize {
+        // the small tolerance keeps an exact multiple from gaining a
+        // zero-length top tread through rounding
+        ((region_length_m / (2.0 * length_m) - 1e-9).ceil() - 1.0).max(0.0) as usize
+    }
+
+    /// The surface height at (x, y), m (x clamped to the region).
+    pub fn height_m(&self, x_m: f64, y_m: f64) -> f64 {
+        match self {
+            Self::Grid(grid) => grid.height_m(x_m, y_m),
+            Self::Hill {
+                x_m: (x0, x1), tan, ..
+            } => {
+                let x = x_m.clamp(*x0, *x1);
+                tan * (x - x0).min(x1 - x)
+            }
+            Self::Stairs {
+                x_m: (x0, x1),
+                height_m,
+                length_m,
+                ..
+            } => {
+                let x = x_m.clamp(*x0, *x1);
+                let levels = Self::stair_levels(x1 - x0, *length_m);
+                let up = ((x - x0) / length_m).floor();
+                let down = ((x1 - x) / length_m).floor();
+                height_m * up.min(down).clamp(0.0, levels as f64)
+            }
+        }
+    }
+
+    /// The lowest surface height, m.
+    pub fn lowest_m(&self) -> f64 {
+        match self {
+            Self::Grid(grid) => grid.lowest_m(),
+            Self::Hill { .. } | Self::Stairs { .. } => 0.0,
+        }
+    }
+
+    /// The profile (x, z) along x of a hill or stairs, from x0 to x1 (a riser
+    /// is two points at the same x); empty for a grid.
+    fn profile_m(&self) -> Vec<[f64; 2]> {
+        match self {
+            Self::Grid(_) => Vec::new(),
+            Self::Hill {
+                x_m: (x0, x1), tan, ..
+            } => {
+                let middle = (x0 + x1) / 2.0;
+                vec![[*x0, 0.0], [middle, tan * (middle - x0)], [*x1, 0.0]]
+            }
+            Self::Stairs {
+                x_m: (x0, x1),
+                height_m,
+                length_m,
+                ..
+            } => {
+                let levels = Self::stair_levels(x1 - x0, *length_m);
+                let mut points = vec![[*x0, 0.0]];
+                for k in 1..=levels {
+                    let x = x0 + k as f64 * length_m;
+                    points.push([x, (k - 1) as f64 * height_m]);
+                    points.push([x, k as f64 * height_m]);
+                }
+                for k in (1..=levels).rev() {
+                    let x = x1 - k as f64 * length_m;
+                    points.push([x, k as f64 * height_m]);
+                    points.push([x, (k - 1) as f64 * height_m]);
+                }
+                points.push([*x1, 0.0]);
+                points
+            }
+        }
+    }
+
+    /// The surface as triangles, world frame (risers included).
+    pub fn mesh(&self) -> GroundMesh {
+        let (y0, y1) = match self {
+            Self::Grid(grid) => return grid.mesh(),
+            Self::Hill { y_m, .. } | Self::Stairs { y_m, .. } => *y_m,
+        };
+        let mut mesh = GroundMesh::default();
+        for pair in self.profile_m().windows(2) {
+            let ([xa, za], [xb, zb]) = (pair[0], pair[1]);
+            // counter-clockwise seen from the side the surface faces
+            mesh.push_quad([[xa, y0, za], [xb, y0, zb], [xb, y1, zb], [xa, y1, za]]);
+        }
+        mesh
+    }
+
+    /// Solid colliders of the relief (friction and groups still to set): the
+    /// grid's mesh; a hill's prism; the stairs' nested blocks, block k over
+    /// [x0 + k run, x1 - k run] up to k height.
+    pub fn colliders(&self) -> Vec<ColliderBuilder> {
+        let bottom = REGION_SOLID_BOTTOM_M;
+        match self {
+            Self::Grid(grid) => vec![grid.collider()],
+            Self::Hill { y_m: (y0, y1), .. } => {
+                let mut points = Vec::new();
+                for [x, z] in self.profile_m() {
+                    for y in [*y0, *y1] {
+                        points.push(Vector::new(x as f32, y as f32, z as f32));
+                        points.push(Vector::new(x as f32, y as f32, bottom as f32));
+                    }
+                }
+                vec![ColliderBuilder::convex_hull(&points).expect("a hill's prism has volume")]
+            }
+            Self::Stairs {
+                x_m: (x0, x1),
+                y_m: (y0, y1),
+                height_m,
+                length_m,
+            } => (0..=Self::stair_levels(x1 - x0, *length_m))
+                .map(|k| {
+                    let (a, b) = (x0 + k as f64 * length_m, x1 - k as f64 * length_m);
+                    let top = k as f64 * height_m;
+                    ColliderBuilder::cuboid(
+                        ((b - a) / 2.0) as f32,
+                        ((y1 - y0) / 2.0) as f32,
+                        ((top - bottom) / 2.0) as f32,
+                    )
+                    .translation(Vector::new(
+                        ((a + b) / 2.0) as f32,
+                        ((y0 + y1) / 2.0) as f32,
+                        ((top + bottom) / 2.0) as f32,
+                    ))
+                })
+                .collect(),
+        }
+    }
+}
+
 /// The shape of a relief.
 #[derive(Debug, Clone, PartialEq)]
 enum Shape {
@@ -276,6 +447,10 @@ impl Terrain for Relief {
     }
 
     fn surface_height_m(&self, _world: &PhysicsWorld, x_m: f64, y_m: f64) -> f64 {
+        self.height_m(x_m, y_m)
+    }
+
+    fn rest_height_m(&self, x_m: f64, y_m: f64) -> f64 {
         self.height_m(x_m, y_m)
     }
 

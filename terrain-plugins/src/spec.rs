@@ -43,7 +43,7 @@ impl ParamKind {
             Self::Number => "a number such as 0.5",
             Self::Depth => "a depth such as 5cm, or a range such as 2..5cm",
             Self::Surfaces => {
-                "a list of depths, depth ranges, `rigid` and (spec)s of rigid, elastic, soil or rough ground, such as 2,3,4,5cm,rigid or 2..5cm,(soil:4cm),(rough:1cm)"
+                "a list of depths, depth ranges, `rigid` and (spec)s of rigid, elastic, soil, rough, slope or steps ground, such as 2,3,4,5cm,rigid or 2..5cm,(soil:4cm),(rough:1cm),(slope:10)"
             }
         }
     }
@@ -76,13 +76,27 @@ pub enum Ground {
         /// grid spacing, m
         cell_m: f64,
     },
+    /// A rigid hill (see [`crate::relief::RegionRelief::Hill`]): rises at
+    /// this angle from the region's start to its middle, falls to its end.
+    Slope {
+        /// inclination, degrees
+        degrees: f64,
+    },
+    /// Rigid stairs (see [`crate::relief::RegionRelief::Stairs`]): up to the
+    /// region's middle and down to its end.
+    Steps {
+        /// rise of each step, m
+        height_m: f64,
+        /// run of each step along x, m
+        length_m: f64,
+    },
 }
 
 impl Ground {
     /// The deepest nominal sink of this ground, metres (0 for rigid).
     pub fn max_depth_m(&self) -> f64 {
         match *self {
-            Self::Rigid | Self::Rough { .. } => 0.0,
+            Self::Rigid | Self::Rough { .. } | Self::Slope { .. } | Self::Steps { .. } => 0.0,
             Self::Elastic { depth_m } => depth_m,
             Self::ElasticRange { max_depth_m, .. } => max_depth_m,
             Self::Soil(soil) => soil.depth_m,
@@ -170,6 +184,12 @@ impl Surface {
                 };
                 format!("rough:{}{cell}", format_length(amplitude_m))
             }
+            Ground::Slope { degrees } => format!("slope:{degrees}"),
+            Ground::Steps { height_m, length_m } => format!(
+                "steps:{}:{}",
+                format_length(height_m),
+                format_length(length_m)
+            ),
         };
         match self.friction {
             Some(mu) => format!("{text}:friction={mu}"),
@@ -177,12 +197,13 @@ impl Surface {
         }
     }
 
-    /// The surface a `rigid`, `elastic` or `soil` spec describes. A spec
-    /// that sets a parameter of the whole tile field (tile, gap, travel,
-    /// damping, tile_mass, length, back, width) is refused: a region takes
-    /// those from the terrain it is part of.
+    /// The surface a `rigid`, `elastic`, `soil`, `rough`, `slope` or
+    /// `steps` spec describes. A spec that sets a parameter of the whole
+    /// field (tile, gap, travel, damping, tile_mass, length, back, width,
+    /// extent) is refused: a region takes those from the terrain it is part
+    /// of (`steps`' `length`, the run of a step, is the region's own).
     pub fn from_spec(spec: &TerrainSpec) -> Result<Self, String> {
-        const REGION_PARAMS: [&str; 7] = [
+        const REGION_PARAMS: [&str; 9] = [
             "depth",
             "friction",
             "elastic",
@@ -190,13 +211,18 @@ impl Surface {
             "recovery",
             "amplitude",
             "cell",
+            "degrees",
+            "height",
         ];
+        let own = |name: &str| {
+            REGION_PARAMS.contains(&name) || (spec.plugin() == "steps" && name == "length")
+        };
         if let Some((decl, _)) = spec
             .params()
-            .find(|(d, v)| !REGION_PARAMS.contains(&d.name) && d.default.as_ref() != Some(*v))
+            .find(|(d, v)| !own(d.name) && d.default.as_ref() != Some(*v))
         {
             return Err(format!(
-                "region ({spec}) sets {}, which belongs to the whole terrain: a region takes its depth, its friction and soil's parameters",
+                "region ({spec}) sets {}, which belongs to the whole terrain: a region takes its depth, its friction and its shape's parameters",
                 decl.name
             ));
         }
@@ -215,10 +241,15 @@ impl Surface {
                 amplitude_m: spec.length_m("amplitude"),
                 cell_m: spec.length_m("cell"),
             },
+            "slope" => Ground::Slope {
+                degrees: spec.number("degrees"),
+            },
+            "steps" => Ground::Steps {
+                height_m: spec.length_m("height"),
+                length_m: spec.length_m("length"),
+            },
             other => {
-                return Err(format!(
-                    "a region is rigid, elastic, soil or rough ground, not {other}"
-                ));
+                return Err(format!("a region is {REGION_KINDS}, not {other}"));
             }
         };
         Ok(Self { ground, friction })
@@ -411,6 +442,9 @@ pub(crate) fn split_top_level(text: &str, separator: char) -> Vec<&str> {
     parts
 }
 
+/// What a region of a surfaces list may be, for error messages.
+const REGION_KINDS: &str = "rigid, elastic, soil or rough ground, a slope or steps";
+
 /// The plugins a region of a surfaces list may name.
 fn surface_registry() -> crate::Registry {
     let mut registry = crate::Registry::empty();
@@ -419,6 +453,8 @@ fn surface_registry() -> crate::Registry {
         Box::new(crate::elastic::ElasticPlugin),
         Box::new(crate::soil::SoilPlugin),
         Box::new(crate::relief::RoughPlugin),
+        Box::new(crate::relief::SlopePlugin),
+        Box::new(crate::relief::StepsPlugin),
     ] {
         registry
             .register(plugin)
@@ -438,9 +474,9 @@ fn parse_nested_surface(item: &str) -> Result<Surface, String> {
         .transpose()?
         .unwrap_or(item);
     let plugin = inner.split(':').next().unwrap_or_default().trim();
-    if !["rigid", "elastic", "soil", "rough"].contains(&plugin) {
+    if !["rigid", "elastic", "soil", "rough", "slope", "steps"].contains(&plugin) {
         return Err(format!(
-            "item {item:?}: a region is rigid, elastic, soil or rough ground, not {plugin:?}"
+            "item {item:?}: a region is {REGION_KINDS}, not {plugin:?}"
         ));
     }
     let spec = surface_registry()

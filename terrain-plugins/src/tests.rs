@@ -65,6 +65,10 @@ fn display_is_canonical_and_round_trips() {
         ),
         ("varying:2m:(elastic:5cm),(rigid)", "varying:2m:5cm,rigid"),
         (
+            "varying:2m:(slope:10.0),(steps:50mm:0.3m),(slope:5:friction=0.5)",
+            "varying:2m:(slope:10),(steps:5cm:30cm),(slope:5:friction=0.5)",
+        ),
+        (
             "varying:2m:(rough:10mm),(rough:2cm:cell=5cm),5cm",
             "varying:2m:(rough:1cm),(rough:2cm:cell=5cm),5cm",
         ),
@@ -156,11 +160,20 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ),
         (
             "varying:2m:(varying:1m:2cm)",
-            "a region is rigid, elastic, soil or rough ground",
+            "a region is rigid, elastic, soil or rough ground, a slope or steps, not \"varying\"",
+        ),
+        ("varying:2m:5cm,(slope:50)", "too steep"),
+        (
+            "varying:2m:5cm,(steps:5cm:1m)",
+            "no room for a step in regions of 2m",
         ),
         (
-            "varying:2m:5cm,(slope:5)",
-            "a region is rigid, elastic, soil or rough ground",
+            "varying:2m:(steps:5cm:30cm:extent=4m)",
+            "belongs to the whole terrain",
+        ),
+        (
+            "varying:2m:(slope:10:width=2m)",
+            "belongs to the whole terrain",
         ),
         (
             "varying:2m:(rough:1cm:length=4m)",
@@ -720,6 +733,23 @@ fn relief_surfaces_are_where_their_colliders_are() {
             "rough:2cm",
             vec![(0.0, 0.0), (0.33, 0.41), (2.71, -0.88), (-1.23, 1.1)],
         ),
+        (
+            // hills: [-2, 2] (apex at 0), [2, 4] (apex at 3), ...
+            "varying:2m:(slope:10)",
+            vec![(0.0, 0.0), (1.0, 0.3), (2.5, -0.4), (3.0, 1.0), (3.6, -1.0)],
+        ),
+        (
+            // stairs of 30 cm runs in [2, 4]: 5 cm at 2.3, 10 at 2.6, 15 over [2.9, 3.1]
+            "varying:2m:(steps:5cm:30cm)",
+            vec![
+                (2.1, 0.0),
+                (2.45, 0.3),
+                (2.75, -1.0),
+                (3.0, -0.5),
+                (3.55, 1.0),
+                (3.95, 0.2),
+            ],
+        ),
     ] {
         let (world, terrain) = world_with(spec, 5);
         for (x, y) in points {
@@ -737,6 +767,76 @@ fn relief_surfaces_are_where_their_colliders_are() {
     let (world, steps) = world_with("steps:5cm:1m", 0);
     assert_eq!(steps.surface_height_m(&world, 2.5, 0.0), 0.1);
     assert_eq!(steps.surface_height_m(&world, -0.5, 0.0), 0.0);
+}
+
+#[test]
+fn hill_and_stair_regions_rise_to_their_middle_and_join_at_ground_level() {
+    let spec = "varying:2m:rigid,(slope:10),(steps:5cm:30cm),5cm";
+    let (world, terrain) = world_with(spec, 3);
+    let tan = 10f64.to_radians().tan();
+    let mut seen = std::collections::BTreeSet::new();
+    for region in terrain.regions() {
+        let (x0, x1) = region.x_range_m;
+        let middle = (x0 + x1) / 2.0;
+        let h = |x: f64| terrain.surface_height_m(&world, x, 0.3);
+        // every region starts and ends at z = 0: no cliff between regions
+        for x in [x0 + 0.01, x1 - 0.01] {
+            assert!(
+                h(x).abs() < 0.01 * tan + 1e-9,
+                "{} at {x}: {}",
+                region.label,
+                h(x)
+            );
+        }
+        let (top, quarter) = match region.label.as_str() {
+            "rigid" | "elastic:5cm" => (0.0, 0.0),
+            "slope:10" => (tan * (middle - x0), tan * (middle - x0) / 2.0),
+            // 2 m regions: 3 steps up (5, 10, 15 cm) and 3 down
+            "steps:5cm:30cm" => (0.15, 0.05),
+            other => panic!("region {other} is not in {spec}"),
+        };
+        assert!(
+            (h(middle) - top).abs() < 1e-9,
+            "{}: top {}",
+            region.label,
+            h(middle)
+        );
+        let at_quarter = h((x0 + middle) / 2.0);
+        assert!(
+            (at_quarter - quarter).abs() < 1e-9,
+            "{}: {at_quarter}",
+            region.label
+        );
+        seen.insert(region.label.clone());
+    }
+    assert_eq!(seen.len(), 4, "seed 3 draws every surface: {seen:?}");
+    // The viewer's mesh holds each hill's two faces and each flight's
+    // treads and risers: 2 + (2 x 3 + 1 + 2 x 3) quads per region of each.
+    let mesh = terrain.ground_mesh().expect("hills and stairs have a mesh");
+    let count = |label: &str| {
+        terrain
+            .regions()
+            .iter()
+            .filter(|r| r.label == label)
+            .count()
+    };
+    let quads = 2 * count("slope:10") + 13 * count("steps:5cm:30cm");
+    assert_eq!(mesh.triangles.len(), 2 * quads);
+    let highest = mesh
+        .vertices_m
+        .iter()
+        .map(|v| v[2])
+        .fold(f64::MIN, f64::max);
+    assert!((highest - 0.1763).abs() < 1e-3, "highest vertex {highest}");
+}
+
+#[test]
+fn stairs_levels_fit_the_region() {
+    use crate::relief::RegionRelief;
+    assert_eq!(RegionRelief::stair_levels(2.0, 0.3), 3);
+    assert_eq!(RegionRelief::stair_levels(2.0, 0.5), 1); // exactly 2 runs per side: the top tread keeps 1 m
+    assert_eq!(RegionRelief::stair_levels(2.0, 0.99), 1);
+    assert_eq!(RegionRelief::stair_levels(2.0, 1.0), 0);
 }
 
 #[test]

@@ -31,7 +31,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rapier3d::prelude::*;
 
-use crate::relief::HeightGrid;
+use crate::relief::{HeightGrid, RegionRelief};
 use crate::soil::SoilModel;
 use crate::spec::{Ground, ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
 use crate::units::format_length;
@@ -243,8 +243,8 @@ enum RegionModel {
         model: SoilModel,
         damping_n_s_per_m: f64,
     },
-    /// no tiles: rigid ground with random heights (its grid in `grids`)
-    Rough,
+    /// no tiles: rigid relief, rough, a hill or stairs (in `reliefs`)
+    Relief,
 }
 
 /// One tile's spring, fixed when the terrain is laid out.
@@ -279,8 +279,8 @@ pub struct TiledTerrain {
     models: Vec<RegionModel>,
     /// each region's friction coefficient
     frictions: Vec<f64>,
-    /// each rough region's height grid
-    grids: Vec<Option<HeightGrid>>,
+    /// each relief region's relief
+    reliefs: Vec<Option<RegionRelief>>,
     /// one entry per cell, row-major by column: `None` for rigid cells
     cell_springs: Vec<Option<TileSpring>>,
     /// region index of each column
@@ -342,7 +342,7 @@ impl TiledTerrain {
         let half = pitch / 2.0;
         let mut regions = Vec::new();
         let mut models = Vec::new();
-        let mut grids = Vec::new();
+        let mut reliefs = Vec::new();
         let half_width_m = rows as f64 * pitch / 2.0;
         let frictions: Vec<f64> = region_surfaces
             .iter()
@@ -358,7 +358,7 @@ impl TiledTerrain {
             };
             // What `terrain show` reports: for a range, the springs of its
             // middle depth.
-            let mut grid = None;
+            let mut relief = None;
             let (label, model, reported, expected_sink_m) = match surface.ground {
                 Ground::Rigid => (surface.label(), RegionModel::Rigid, None, 0.0),
                 Ground::Rough {
@@ -369,14 +369,31 @@ impl TiledTerrain {
                     let seed = ctx
                         .seed
                         .wrapping_add((index as u64 + 1).wrapping_mul(ROUGH_REGION_STRIDE));
-                    grid = Some(HeightGrid::random(
+                    relief = Some(RegionRelief::Grid(HeightGrid::random(
                         x_range_m,
                         (-half_width_m, half_width_m),
                         cell_m,
                         amplitude_m,
                         seed,
-                    ));
-                    (surface.label(), RegionModel::Rough, None, 0.0)
+                    )));
+                    (surface.label(), RegionModel::Relief, None, 0.0)
+                }
+                Ground::Slope { degrees } => {
+                    relief = Some(RegionRelief::Hill {
+                        x_m: x_range_m,
+                        y_m: (-half_width_m, half_width_m),
+                        tan: degrees.to_radians().tan(),
+                    });
+                    (surface.label(), RegionModel::Relief, None, 0.0)
+                }
+                Ground::Steps { height_m, length_m } => {
+                    relief = Some(RegionRelief::Stairs {
+                        x_m: x_range_m,
+                        y_m: (-half_width_m, half_width_m),
+                        height_m,
+                        length_m,
+                    });
+                    (surface.label(), RegionModel::Relief, None, 0.0)
                 }
                 Ground::Elastic { depth_m } => {
                     let (k, c) = spring_at(depth_m);
@@ -428,7 +445,7 @@ impl TiledTerrain {
                 expected_sink_m,
             });
             models.push(model);
-            grids.push(grid);
+            reliefs.push(relief);
         }
 
         // Each cell's spring; a depth range draws one per tile, in cell
@@ -439,7 +456,7 @@ impl TiledTerrain {
         for &region in &column_region {
             for _ in 0..rows {
                 let spring = match models[region] {
-                    RegionModel::Rigid | RegionModel::Rough => None,
+                    RegionModel::Rigid | RegionModel::Relief => None,
                     RegionModel::Elastic {
                         stiffness_n_per_m,
                         damping_n_s_per_m,
@@ -480,7 +497,7 @@ impl TiledTerrain {
             regions,
             models,
             frictions,
-            grids,
+            reliefs,
             cell_springs,
             column_region,
             columns,
@@ -561,6 +578,14 @@ impl TiledTerrain {
     pub fn params(&self) -> &TileParams {
         &self.params
     }
+
+    /// The height of a relief region's surface along y = 0 (0 elsewhere), m.
+    fn relief_height_m(&self, x_m: f64) -> f64 {
+        let region = self.region_index_at(x_m, 0.0);
+        self.reliefs[region]
+            .as_ref()
+            .map_or(0.0, |relief| relief.height_m(x_m, 0.0))
+    }
 }
 
 impl Terrain for TiledTerrain {
@@ -590,22 +615,22 @@ impl Terrain for TiledTerrain {
 
         // Rigid regions: one solid block per region, top at z = 0.
         let depth_below = p.travel_m + TILE_THICKNESS_M;
-        for (((region, model), friction), grid) in self
+        for (((region, model), friction), relief) in self
             .regions
             .iter()
             .zip(&self.models)
             .zip(&self.frictions)
-            .zip(&self.grids)
+            .zip(&self.reliefs)
         {
-            if matches!(model, RegionModel::Rigid | RegionModel::Rough) {
-                // Rough ground: its mesh, over a block that stops just below it.
-                let top_m = match grid {
-                    Some(grid) => {
-                        world.insert_collider(
-                            terrain_collider(grid.collider(), *friction),
-                            Some(base),
-                        );
-                        grid.lowest_m() - 0.01
+            if matches!(model, RegionModel::Rigid | RegionModel::Relief) {
+                // Relief: its solids, over a block that stops just below it.
+                let top_m = match relief {
+                    Some(relief) => {
+                        for collider in relief.colliders() {
+                            world
+                                .insert_collider(terrain_collider(collider, *friction), Some(base));
+                        }
+                        relief.lowest_m() - 0.01
                     }
                     None => 0.0,
                 };
@@ -785,10 +810,19 @@ impl Terrain for TiledTerrain {
             None => self.base_top_m(),
             Some((ix, iy)) => match self.tiles.get(ix * self.rows + iy).copied().flatten() {
                 Some(tile) => -self.tile_sink_m(world, tile.body),
-                None => self.grids[self.column_region[ix]]
+                None => self.reliefs[self.column_region[ix]]
                     .as_ref()
-                    .map_or(0.0, |grid| grid.height_m(x_m, y_m)),
+                    .map_or(0.0, |relief| relief.height_m(x_m, y_m)),
             },
+        }
+    }
+
+    fn rest_height_m(&self, x_m: f64, y_m: f64) -> f64 {
+        match self.cell_at(x_m, y_m) {
+            None => self.base_top_m(),
+            Some((ix, _)) => self.reliefs[self.column_region[ix]]
+                .as_ref()
+                .map_or(0.0, |relief| relief.height_m(x_m, y_m)),
         }
     }
 
@@ -861,8 +895,8 @@ impl Terrain for TiledTerrain {
     /// The rough regions' ground, if any.
     fn ground_mesh(&self) -> Option<GroundMesh> {
         let mut all = GroundMesh::default();
-        for grid in self.grids.iter().flatten() {
-            let mesh = grid.mesh();
+        for relief in self.reliefs.iter().flatten() {
+            let mesh = relief.mesh();
             let first = all.vertices_m.len() as u32;
             all.vertices_m.extend(mesh.vertices_m);
             all.triangles
@@ -930,6 +964,34 @@ impl Terrain for TiledTerrain {
                         ));
                     }
                 }
+                RegionModel::Relief => match &self.reliefs[region.index] {
+                    Some(RegionRelief::Hill { x_m: (x0, x1), .. }) => {
+                        let middle = (x0 + x1) / 2.0;
+                        lines.push(format!(
+                            "region {} ({}): a hill {:.1} cm high at x = {:.2} m",
+                            region.index,
+                            region.label,
+                            self.relief_height_m(middle) * 100.0,
+                            middle
+                        ));
+                    }
+                    Some(RegionRelief::Stairs {
+                        x_m: (x0, x1),
+                        length_m,
+                        ..
+                    }) => {
+                        let middle = (x0 + x1) / 2.0;
+                        lines.push(format!(
+                            "region {} ({}): {} steps up to {:.1} cm at x = {:.2} m, and down",
+                            region.index,
+                            region.label,
+                            RegionRelief::stair_levels(x1 - x0, *length_m),
+                            self.relief_height_m(middle) * 100.0,
+                            middle
+                        ));
+                    }
+                    _ => {}
+                },
                 _ => {}
             }
         }

@@ -3,9 +3,14 @@
 //! takes the first surface of the list (the paper starts training on 2 cm);
 //! every later region draws one surface uniformly from the whole list with
 //! the world's seed. `rigid` may appear in the list:
-//! `varying:2m:2,3,4,5cm,rigid`.
+//! `varying:2m:2,3,4,5cm,rigid`, and any surface spec in parentheses:
+//! `varying:2m:5cm,(soil:4cm),(rough:1cm),(slope:10),(steps:5cm:30cm)`.
+//! A slope region is a hill and a steps region a flight of stairs, each up
+//! to the region's middle and down to its end, so that regions join at
+//! z = 0 (legged_gym's pyramid terrains, along x).
 
-use crate::spec::{ParamDecl, ParamKind, Surface, TerrainSpec};
+use crate::relief::RegionRelief;
+use crate::spec::{Ground, ParamDecl, ParamKind, Surface, TerrainSpec};
 use crate::tiles::{RegionLayout, TileParams, TiledTerrain, tile_param_decls};
 use crate::units::format_length;
 use crate::{BuildContext, Terrain, TerrainPlugin};
@@ -44,6 +49,16 @@ impl TerrainPlugin for VaryingPlugin {
                 format_length(every_m),
                 format_length(params.pitch_m)
             ));
+        }
+        for surface in spec.surfaces("surfaces") {
+            if let Ground::Steps { length_m, .. } = surface.ground
+                && RegionRelief::stair_levels(every_m, length_m) == 0
+            {
+                return Err(format!(
+                    "region {surface} has no room for a step in regions of {}: a steps region climbs to its middle and back down, so a step's run must be shorter than half a region",
+                    format_length(every_m)
+                ));
+            }
         }
         let depths = spec.surfaces("surfaces").iter().map(Surface::max_depth_m);
         params.validate(depths)

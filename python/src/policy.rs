@@ -5,7 +5,6 @@ use numpy::{
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use quadwalk_cli::Registry;
 
 use crate::scene::{runtime_error, value_error};
 
@@ -23,7 +22,7 @@ impl Policy {
     /// Loads the checkpoint at `path`.
     #[staticmethod]
     fn load(path: &str) -> PyResult<Self> {
-        let registry = Registry::builtin();
+        let registry = crate::scene::registry();
         if path == "scripted" {
             return Err(PyValueError::new_err(
                 "policy \"scripted\": the scripted crawl needs the task, not an observation; load a checkpoint",

@@ -2,7 +2,7 @@
 //! (terrain, task, physics) and the robot; and the registry seen from Python.
 
 use std::path::Path;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -13,6 +13,16 @@ use robot::task::Task;
 /// The terrain the environments use when neither a terrain nor a config is
 /// given: the paper's 5 cm tiles.
 pub const DEFAULT_TERRAIN: &str = "elastic:5cm";
+
+/// The terrain plugins every environment, policy and `terrains()` of the
+/// package uses: the built-in ones, made once (the package's counterpart of
+/// the `quadwalk` binary's `App::new()`).
+pub fn registry() -> Arc<Registry> {
+    static REGISTRY: OnceLock<Arc<Registry>> = OnceLock::new();
+    REGISTRY
+        .get_or_init(|| Arc::new(Registry::builtin()))
+        .clone()
+}
 
 /// A `ValueError` carrying an error's whole chain on one line.
 pub fn value_error(error: impl Into<anyhow::Error>) -> PyErr {
@@ -44,7 +54,7 @@ impl Scene {
         config: Option<&str>,
         max_phases: Option<usize>,
     ) -> PyResult<Self> {
-        let registry = Arc::new(Registry::builtin());
+        let registry = registry();
         let parse = |spec: &str| {
             registry
                 .parse(spec)
@@ -92,8 +102,7 @@ impl Scene {
 /// and `params` (each a dict: `name`, `default` (None: required), `doc`).
 #[pyfunction]
 pub fn terrains(py: Python<'_>) -> PyResult<Vec<Py<pyo3::types::PyDict>>> {
-    let registry = Registry::builtin();
-    registry
+    registry()
         .plugins()
         .map(|plugin| {
             let entry = pyo3::types::PyDict::new(py);

@@ -108,9 +108,10 @@ impl Ground {
 /// its ground and, if it has its own, its friction coefficient.
 ///
 /// In a list a surface is written `5cm`, `2..5cm`, `rigid`, or as a spec of
-/// the `rigid`, `elastic` or `soil` plugin in parentheses, which may name
-/// the region's friction: `(rigid:friction=0.1)`, `(soil:4cm:yield=0.4)`,
-/// `(elastic:5cm:friction=0.5)`. In a TOML list the parentheses may be left
+/// the `rigid`, `elastic`, `soil`, `rough`, `slope` or `steps` plugin in
+/// parentheses, which may name the region's friction:
+/// `(rigid:friction=0.1)`, `(soil:4cm:yield=0.4)`,
+/// `(elastic:5cm:friction=0.5)`, `(slope:10)`, `(steps:5cm:30cm)`. In a TOML list the parentheses may be left
 /// out: `surfaces = ["5cm", "soil:4cm", "rigid:friction=0.1"]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Surface {

@@ -33,7 +33,7 @@ impl TerrainPlugin for VaryingPlugin {
             ParamDecl::required(
                 "surfaces",
                 ParamKind::Surfaces,
-                "depths and `rigid` to draw from; the first is where the robot starts",
+                "surfaces to draw from (depths, `rigid`, (spec)s of other ground); the first is where the robot starts",
             ),
         ];
         params.extend(tile_param_decls());

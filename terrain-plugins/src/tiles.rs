@@ -227,7 +227,7 @@ pub enum RegionLayout {
 }
 
 /// How the tiles of one region respond to load.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 enum RegionModel {
     /// no tiles: a solid block
     Rigid,
@@ -243,8 +243,8 @@ enum RegionModel {
         model: SoilModel,
         damping_n_s_per_m: f64,
     },
-    /// no tiles: rigid relief, rough, a hill or stairs (in `reliefs`)
-    Relief,
+    /// no tiles: rigid relief, rough, a hill or stairs
+    Relief(RegionRelief),
 }
 
 /// One tile's spring, fixed when the terrain is laid out.
@@ -279,8 +279,6 @@ pub struct TiledTerrain {
     models: Vec<RegionModel>,
     /// each region's friction coefficient
     frictions: Vec<f64>,
-    /// each relief region's relief
-    reliefs: Vec<Option<RegionRelief>>,
     /// one entry per cell, row-major by column: `None` for rigid cells
     cell_springs: Vec<Option<TileSpring>>,
     /// region index of each column
@@ -342,7 +340,6 @@ impl TiledTerrain {
         let half = pitch / 2.0;
         let mut regions = Vec::new();
         let mut models = Vec::new();
-        let mut reliefs = Vec::new();
         let half_width_m = rows as f64 * pitch / 2.0;
         let frictions: Vec<f64> = region_surfaces
             .iter()
@@ -358,7 +355,6 @@ impl TiledTerrain {
             };
             // What `terrain show` reports: for a range, the springs of its
             // middle depth.
-            let mut relief = None;
             let (label, model, reported, expected_sink_m) = match surface.ground {
                 Ground::Rigid => (surface.label(), RegionModel::Rigid, None, 0.0),
                 Ground::Rough {
@@ -369,31 +365,32 @@ impl TiledTerrain {
                     let seed = ctx
                         .seed
                         .wrapping_add((index as u64 + 1).wrapping_mul(ROUGH_REGION_STRIDE));
-                    relief = Some(RegionRelief::Grid(HeightGrid::random(
+                    let grid = HeightGrid::random(
                         x_range_m,
                         (-half_width_m, half_width_m),
                         cell_m,
                         amplitude_m,
                         seed,
-                    )));
-                    (surface.label(), RegionModel::Relief, None, 0.0)
+                    );
+                    let model = RegionModel::Relief(RegionRelief::Grid(grid));
+                    (surface.label(), model, None, 0.0)
                 }
                 Ground::Slope { degrees } => {
-                    relief = Some(RegionRelief::Hill {
+                    let model = RegionModel::Relief(RegionRelief::Hill {
                         x_m: x_range_m,
                         y_m: (-half_width_m, half_width_m),
                         tan: degrees.to_radians().tan(),
                     });
-                    (surface.label(), RegionModel::Relief, None, 0.0)
+                    (surface.label(), model, None, 0.0)
                 }
                 Ground::Steps { height_m, length_m } => {
-                    relief = Some(RegionRelief::Stairs {
+                    let model = RegionModel::Relief(RegionRelief::Stairs {
                         x_m: x_range_m,
                         y_m: (-half_width_m, half_width_m),
                         height_m,
                         length_m,
                     });
-                    (surface.label(), RegionModel::Relief, None, 0.0)
+                    (surface.label(), model, None, 0.0)
                 }
                 Ground::Elastic { depth_m } => {
                     let (k, c) = spring_at(depth_m);
@@ -445,7 +442,6 @@ impl TiledTerrain {
                 expected_sink_m,
             });
             models.push(model);
-            reliefs.push(relief);
         }
 
         // Each cell's spring; a depth range draws one per tile, in cell
@@ -456,7 +452,7 @@ impl TiledTerrain {
         for &region in &column_region {
             for _ in 0..rows {
                 let spring = match models[region] {
-                    RegionModel::Rigid | RegionModel::Relief => None,
+                    RegionModel::Rigid | RegionModel::Relief(_) => None,
                     RegionModel::Elastic {
                         stiffness_n_per_m,
                         damping_n_s_per_m,
@@ -497,7 +493,6 @@ impl TiledTerrain {
             regions,
             models,
             frictions,
-            reliefs,
             cell_springs,
             column_region,
             columns,
@@ -579,12 +574,19 @@ impl TiledTerrain {
         &self.params
     }
 
-    /// The height of a relief region's surface along y = 0 (0 elsewhere), m.
-    fn relief_height_m(&self, x_m: f64) -> f64 {
-        let region = self.region_index_at(x_m, 0.0);
-        self.reliefs[region]
-            .as_ref()
-            .map_or(0.0, |relief| relief.height_m(x_m, 0.0))
+    /// The relief of region `region`, if it is a relief region.
+    fn relief(&self, region: usize) -> Option<&RegionRelief> {
+        match &self.models[region] {
+            RegionModel::Relief(relief) => Some(relief),
+            _ => None,
+        }
+    }
+
+    /// The unloaded height of the ground at (x, y) in column `ix`: a relief
+    /// region's, else the tiles' and rigid blocks' top, z = 0, m.
+    fn resting_top_m(&self, ix: usize, x_m: f64, y_m: f64) -> f64 {
+        self.relief(self.column_region[ix])
+            .map_or(0.0, |relief| relief.height_m(x_m, y_m))
     }
 }
 
@@ -613,41 +615,36 @@ impl Terrain for TiledTerrain {
             ));
         world.insert_collider(terrain_collider(floor, p.friction), Some(base));
 
-        // Rigid regions: one solid block per region, top at z = 0.
+        // Rigid and relief regions: one solid block per region, top at z = 0
+        // (just below a relief).
         let depth_below = p.travel_m + TILE_THICKNESS_M;
-        for (((region, model), friction), relief) in self
-            .regions
-            .iter()
-            .zip(&self.models)
-            .zip(&self.frictions)
-            .zip(&self.reliefs)
+        for ((region, model), friction) in
+            self.regions.iter().zip(&self.models).zip(&self.frictions)
         {
-            if matches!(model, RegionModel::Rigid | RegionModel::Relief) {
-                // Relief: its solids, over a block that stops just below it.
-                let top_m = match relief {
-                    Some(relief) => {
-                        for collider in relief.colliders() {
-                            world
-                                .insert_collider(terrain_collider(collider, *friction), Some(base));
-                        }
-                        relief.lowest_m() - 0.01
+            // Relief: its solids, over a block that stops just below it.
+            let top_m = match model {
+                RegionModel::Rigid => 0.0,
+                RegionModel::Relief(relief) => {
+                    for collider in relief.colliders() {
+                        world.insert_collider(terrain_collider(collider, *friction), Some(base));
                     }
-                    None => 0.0,
-                };
-                let (x0, x1) = region.x_range_m;
-                let thickness_m = depth_below + top_m;
-                let block = ColliderBuilder::cuboid(
-                    ((x1 - x0) / 2.0) as f32,
-                    ((extent.max_m[1] - extent.min_m[1]) / 2.0) as f32,
-                    (thickness_m / 2.0) as f32,
-                )
-                .translation(Vector::new(
-                    ((x0 + x1) / 2.0) as f32,
-                    0.0,
-                    (top_m - thickness_m / 2.0) as f32,
-                ));
-                world.insert_collider(terrain_collider(block, *friction), Some(base));
-            }
+                    relief.lowest_m() - 0.01
+                }
+                _ => continue,
+            };
+            let (x0, x1) = region.x_range_m;
+            let thickness_m = depth_below + top_m;
+            let block = ColliderBuilder::cuboid(
+                ((x1 - x0) / 2.0) as f32,
+                ((extent.max_m[1] - extent.min_m[1]) / 2.0) as f32,
+                (thickness_m / 2.0) as f32,
+            )
+            .translation(Vector::new(
+                ((x0 + x1) / 2.0) as f32,
+                0.0,
+                (top_m - thickness_m / 2.0) as f32,
+            ));
+            world.insert_collider(terrain_collider(block, *friction), Some(base));
         }
 
         // Elastic cells: a sleeping box on a sprung prismatic joint.
@@ -655,8 +652,8 @@ impl Terrain for TiledTerrain {
         let g = self.ctx.gravity_m_per_s2;
         self.tiles = Vec::with_capacity(self.columns * self.rows);
         for ix in 0..self.columns {
-            let soil = match self.models[self.column_region[ix]] {
-                RegionModel::Soil { model, .. } => Some((model, 0.0)),
+            let soil = match &self.models[self.column_region[ix]] {
+                RegionModel::Soil { model, .. } => Some((*model, 0.0)),
                 _ => None,
             };
             for iy in 0..self.rows {
@@ -810,9 +807,7 @@ impl Terrain for TiledTerrain {
             None => self.base_top_m(),
             Some((ix, iy)) => match self.tiles.get(ix * self.rows + iy).copied().flatten() {
                 Some(tile) => -self.tile_sink_m(world, tile.body),
-                None => self.reliefs[self.column_region[ix]]
-                    .as_ref()
-                    .map_or(0.0, |relief| relief.height_m(x_m, y_m)),
+                None => self.resting_top_m(ix, x_m, y_m),
             },
         }
     }
@@ -820,9 +815,7 @@ impl Terrain for TiledTerrain {
     fn rest_height_m(&self, x_m: f64, y_m: f64) -> f64 {
         match self.cell_at(x_m, y_m) {
             None => self.base_top_m(),
-            Some((ix, _)) => self.reliefs[self.column_region[ix]]
-                .as_ref()
-                .map_or(0.0, |relief| relief.height_m(x_m, y_m)),
+            Some((ix, _)) => self.resting_top_m(ix, x_m, y_m),
         }
     }
 
@@ -892,10 +885,10 @@ impl Terrain for TiledTerrain {
         Some((self.params.pitch_m - self.params.gap_m, self.params.pitch_m))
     }
 
-    /// The rough regions' ground, if any.
+    /// The relief regions' ground (rough, hills, stairs), if any.
     fn ground_mesh(&self) -> Option<GroundMesh> {
         let mut all = GroundMesh::default();
-        for relief in self.reliefs.iter().flatten() {
+        for relief in (0..self.models.len()).filter_map(|r| self.relief(r)) {
             let mesh = relief.mesh();
             let first = all.vertices_m.len() as u32;
             all.vertices_m.extend(mesh.vertices_m);
@@ -912,7 +905,7 @@ impl Terrain for TiledTerrain {
         let mut lines = Vec::new();
         for (region, model) in self.regions.iter().zip(&self.models) {
             let in_region = |ix: usize| self.column_region[ix] == region.index;
-            match *model {
+            match model {
                 RegionModel::ElasticRange { .. } => {
                     let depths: Vec<f64> = (0..self.columns)
                         .filter(|&ix| in_region(ix))
@@ -964,33 +957,33 @@ impl Terrain for TiledTerrain {
                         ));
                     }
                 }
-                RegionModel::Relief => match &self.reliefs[region.index] {
-                    Some(RegionRelief::Hill { x_m: (x0, x1), .. }) => {
+                RegionModel::Relief(relief) => match relief {
+                    RegionRelief::Hill { x_m: (x0, x1), .. } => {
                         let middle = (x0 + x1) / 2.0;
                         lines.push(format!(
                             "region {} ({}): a hill {:.1} cm high at x = {:.2} m",
                             region.index,
                             region.label,
-                            self.relief_height_m(middle) * 100.0,
+                            relief.height_m(middle, 0.0) * 100.0,
                             middle
                         ));
                     }
-                    Some(RegionRelief::Stairs {
+                    RegionRelief::Stairs {
                         x_m: (x0, x1),
                         length_m,
                         ..
-                    }) => {
+                    } => {
                         let middle = (x0 + x1) / 2.0;
                         lines.push(format!(
                             "region {} ({}): {} steps up to {:.1} cm at x = {:.2} m, and down",
                             region.index,
                             region.label,
                             RegionRelief::stair_levels(x1 - x0, *length_m),
-                            self.relief_height_m(middle) * 100.0,
+                            relief.height_m(middle, 0.0) * 100.0,
                             middle
                         ));
                     }
-                    _ => {}
+                    RegionRelief::Grid(_) => {}
                 },
                 _ => {}
             }

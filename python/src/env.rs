@@ -222,6 +222,31 @@ impl Env {
 /// N tasks stepped in parallel in Rust (the GIL released), with
 /// Gymnasium's next-step autoreset: a step given to a task whose episode
 /// ended resets it instead (reward 0, not terminated, not truncated).
+/// When a finished task starts its next episode (Gymnasium's autoreset
+/// modes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Autoreset {
+    /// on the step after the one that ended it (that step's action is
+    /// ignored, its reward 0): Gymnasium's default, RLlib's
+    NextStep,
+    /// within the step that ended it: the step returns the new episode's
+    /// first observation and the last one in `final_obs` (Stable-Baselines3's
+    /// convention)
+    SameStep,
+}
+
+impl Autoreset {
+    fn parse(text: &str) -> PyResult<Self> {
+        match text {
+            "next_step" => Ok(Self::NextStep),
+            "same_step" => Ok(Self::SameStep),
+            other => Err(PyValueError::new_err(format!(
+                "autoreset {other:?}: expected \"next_step\" or \"same_step\""
+            ))),
+        }
+    }
+}
+
 #[pyclass(module = "quadwalk._quadwalk")]
 pub struct VecEnv {
     scene: Scene,
@@ -230,6 +255,10 @@ pub struct VecEnv {
     seeds: Vec<u64>,
     obs_size: usize,
     obs: Vec<f32>,
+    /// same-step autoreset: each task's last observation of the episode
+    /// that ended in the last step (rows of tasks that did not end are 0)
+    final_obs: Vec<f32>,
+    autoreset: Autoreset,
     pool: rayon::ThreadPool,
     reset_once: bool,
     /// wall time of the last `step`'s parallel phase (the Rust side), s
@@ -246,9 +275,11 @@ impl VecEnv {
 impl VecEnv {
     /// `num_envs` tasks; task i's world and starts are drawn from
     /// `seed + i` (the single `Env` with that seed); stepped on `threads`
-    /// threads (default: all cores).
+    /// threads (default: all cores); `autoreset` "next_step" (default) or
+    /// "same_step".
     #[new]
-    #[pyo3(signature = (num_envs, terrain=None, config=None, seed=0, max_phases=None, threads=None))]
+    #[pyo3(signature = (num_envs, terrain=None, config=None, seed=0, max_phases=None, threads=None, autoreset="next_step"))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         num_envs: usize,
@@ -257,7 +288,9 @@ impl VecEnv {
         seed: u64,
         max_phases: Option<usize>,
         threads: Option<usize>,
+        autoreset: &str,
     ) -> PyResult<Self> {
+        let autoreset = Autoreset::parse(autoreset)?;
         if num_envs == 0 {
             return Err(PyValueError::new_err(
                 "num_envs 0: at least one environment",
@@ -283,6 +316,8 @@ impl VecEnv {
         let obs_size = tasks[0].observation_size();
         Ok(Self {
             obs: vec![0.0; num_envs * obs_size],
+            final_obs: vec![0.0; num_envs * obs_size],
+            autoreset,
             scene,
             tasks: Mutex::new(tasks),
             seeds,
@@ -336,7 +371,11 @@ impl VecEnv {
     /// (observations, rewards, terminated, truncated, infos): infos holds
     /// `reward_terms` (num_envs x 5, in `REWARD_TERMS` order),
     /// `termination` (the cause or None), `region`, `phase`, `autoreset`
-    /// (the task was reset by this step).
+    /// (next-step mode: the task was reset by this step, its action ignored);
+    /// in same-step mode also `final_obs` (num_envs x obs: the last
+    /// observation of each episode that ended in this step, whose task then
+    /// started its next one; rows of the others are 0) and `_final_obs`
+    /// (which rows hold one).
     #[allow(clippy::type_complexity)]
     fn step<'py>(
         &mut self,
@@ -360,24 +399,39 @@ impl VecEnv {
             return Err(PyRuntimeError::new_err("call reset() before step()"));
         }
         let actions: Vec<f32> = actions.as_array().iter().copied().collect();
-        let (pool, obs_size) = (&self.pool, self.obs_size);
-        let (tasks, obs) = (Env::unlocked_all(&mut self.tasks), &mut self.obs);
+        let (pool, obs_size, same_step) = (
+            &self.pool,
+            self.obs_size,
+            self.autoreset == Autoreset::SameStep,
+        );
+        let (tasks, obs, final_obs) = (
+            Env::unlocked_all(&mut self.tasks),
+            &mut self.obs,
+            &mut self.final_obs,
+        );
         let started = Instant::now();
         let results: Vec<Option<(PhaseOutcome, PhaseInfo)>> = py.detach(|| {
             pool.install(|| {
                 tasks
                     .par_iter_mut()
                     .zip(obs.par_chunks_mut(obs_size))
+                    .zip(final_obs.par_chunks_mut(obs_size))
                     .zip(actions.par_chunks(ACTION_SIZE))
-                    .map(|((task, obs), action)| {
+                    .map(|(((task, obs), final_obs), action)| {
                         if task.done() {
+                            // next-step mode only: same-step mode resets below
                             task.reset(obs);
-                            None
-                        } else {
-                            let outcome = task.step_phase(action, obs);
-                            let info = PhaseInfo::new(task, &outcome);
-                            Some((outcome, info))
+                            return None;
                         }
+                        let outcome = task.step_phase(action, obs);
+                        let info = PhaseInfo::new(task, &outcome);
+                        if same_step && task.done() {
+                            final_obs.copy_from_slice(obs);
+                            task.reset(obs);
+                        } else if same_step {
+                            final_obs.fill(0.0);
+                        }
+                        Some((outcome, info))
                     })
                     .collect()
             })
@@ -424,6 +478,18 @@ impl VecEnv {
         infos.set_item("termination", causes)?;
         infos.set_item("region", regions)?;
         infos.set_item("phase", phases)?;
+        if same_step {
+            let ended: Vec<bool> = terminated
+                .iter()
+                .zip(&truncated)
+                .map(|(&a, &b)| a || b)
+                .collect();
+            infos.set_item(
+                "final_obs",
+                PyArray1::from_slice(py, &self.final_obs).reshape([n, self.obs_size])?,
+            )?;
+            infos.set_item("_final_obs", PyArray1::from_vec(py, ended))?;
+        }
         infos.set_item("autoreset", PyArray1::from_vec(py, autoreset))?;
         Ok((
             self.obs_array(py)?,

@@ -104,6 +104,33 @@ def test_vector_env_equals_single_envs():
             np.testing.assert_array_equal(obs[i], expected)
 
 
+def test_same_step_autoreset_returns_the_final_observation():
+    n, seed, steps = 2, 30, 6
+    rng = np.random.default_rng(4)
+    actions = rng.uniform(-0.4, 0.4, (steps, n, 27)).astype(np.float32)
+    venv = quadwalk.make_vec_env(n, "rigid", seed=seed, max_phases=2, threads=2, autoreset_mode="same_step")
+    assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    obs, _ = venv.reset(seed=seed)
+    singles = [quadwalk.make_env("rigid", seed=seed + i, max_phases=2) for i in range(n)]
+    for i, env in enumerate(singles):
+        env.reset(seed=seed + i)
+    ended = 0
+    for t in range(steps):
+        obs, rewards, terminated, truncated, infos = venv.step(actions[t])
+        for i, env in enumerate(singles):
+            expected, r, term, trunc, _ = env.step(actions[t, i])
+            assert rewards[i] == r and terminated[i] == term and truncated[i] == trunc
+            assert infos["_final_obs"][i] == (term or trunc)
+            if term or trunc:  # the step returns the next episode's first observation
+                ended += 1
+                np.testing.assert_array_equal(infos["final_obs"][i], expected)
+                expected = env.reset()[0]
+            np.testing.assert_array_equal(obs[i], expected)
+    assert ended >= n * (steps // 2 - 1)
+    with pytest.raises(ValueError, match="autoreset"):
+        quadwalk.make_vec_env(1, "rigid", autoreset_mode="sometimes")
+
+
 def test_bad_specs_configs_and_actions_raise_value_error(tmp_path):
     with pytest.raises(ValueError, match="elastic:99cm"):
         quadwalk.make_env("elastic:99cm")

@@ -7,7 +7,6 @@ use std::process::{Command, Output};
 use serde_json::Value;
 
 mod eval;
-mod python;
 #[cfg(feature = "rerun")]
 mod rerun_stream;
 mod train;

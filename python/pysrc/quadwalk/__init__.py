@@ -103,18 +103,23 @@ class QuadwalkEnv(gym.Env):
         return tuple(self._env.start_xy_m)
 
 
-def _autoreset_metadata() -> dict[str, Any]:
+def _autoreset_metadata(same_step: bool = False) -> dict[str, Any]:
     mode = getattr(gym.vector, "AutoresetMode", None)
-    return {"autoreset_mode": mode.NEXT_STEP if mode is not None else "NextStep"}
+    if mode is None:
+        return {"autoreset_mode": "SameStep" if same_step else "NextStep"}
+    return {"autoreset_mode": mode.SAME_STEP if same_step else mode.NEXT_STEP}
 
 
 class QuadwalkVectorEnv(gym.vector.VectorEnv):
     """``num_envs`` quadwalk worlds stepped in parallel in Rust (GIL released).
 
     Environment i draws its world and starts from ``seed + i``: it equals
-    ``QuadwalkEnv(seed=seed + i)`` step for step. Autoreset is Gymnasium's
-    next-step mode: the step after an episode ends resets that environment
-    (its action is ignored, reward 0). ``infos`` holds ``reward_terms``
+    ``QuadwalkEnv(seed=seed + i)`` step for step. ``autoreset_mode`` is
+    Gymnasium's ``"next_step"`` (default: the step after an episode ends
+    resets that environment, its action ignored, reward 0) or
+    ``"same_step"`` (the ending step resets it and returns the new episode's
+    first observation; the last one is in ``infos["final_obs"]``, where
+    ``infos["_final_obs"]`` is true). ``infos`` holds ``reward_terms``
     (num_envs x 5, ``REWARD_TERMS`` order), ``termination``, ``region``,
     ``phase`` and ``autoreset``.
     """
@@ -129,10 +134,18 @@ class QuadwalkVectorEnv(gym.vector.VectorEnv):
         seed: int | None = None,
         max_phases: int | None = None,
         threads: int | None = None,
+        autoreset_mode: str = "next_step",
     ) -> None:
         self._env = _NativeVecEnv(
-            num_envs, terrain, _path(config), 0 if seed is None else seed, max_phases, threads
+            num_envs,
+            terrain,
+            _path(config),
+            0 if seed is None else seed,
+            max_phases,
+            threads,
+            str(autoreset_mode),
         )
+        self.metadata = _autoreset_metadata(same_step=autoreset_mode == "same_step")
         self.num_envs = num_envs
         self.single_observation_space, self.single_action_space = _spaces(
             self._env.observation_size
@@ -182,10 +195,12 @@ def make_vec_env(
     seed: int | None = None,
     max_phases: int | None = None,
     threads: int | None = None,
+    autoreset_mode: str = "next_step",
 ) -> QuadwalkVectorEnv:
     """A ``gymnasium.vector.VectorEnv`` of ``num_envs`` worlds stepped in Rust
-    (terrain and config as in ``make_env``)."""
-    return QuadwalkVectorEnv(num_envs, terrain, config, seed, max_phases, threads)
+    (terrain and config as in ``make_env``; ``autoreset_mode`` as in
+    ``QuadwalkVectorEnv``)."""
+    return QuadwalkVectorEnv(num_envs, terrain, config, seed, max_phases, threads, autoreset_mode)
 
 
 def _register() -> None:

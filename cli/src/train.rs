@@ -438,6 +438,7 @@ fn training_curves(stats: &LearnerStats) -> Vec<(String, f64)> {
             ("approx_kl", Some(s.approx_kl)),
             ("clip_fraction", Some(s.clip_fraction)),
             ("explained_variance", Some(s.explained_variance)),
+            ("learning_rate", Some(s.learning_rate)),
         ]),
         LearnerStats::Sac(s) => curves.extend([
             ("critic_loss", s.critic_loss),
@@ -492,6 +493,7 @@ fn metrics_record(
             "grad_norm_critic": s.grad_norm.1,
             "action_std": s.action_std,
             "epochs": s.epochs,
+            "learning_rate": s.learning_rate,
             "secs": {
                 "env": s.env_secs - logging_secs,
                 "logging": logging_secs,

@@ -56,6 +56,10 @@ struct StateFile {
     rng_stream: u64,
     rng_word_pos: String,
     weights_fnv1a64: String,
+    /// the learning rate now, where `ppo.desired_kl` moves it (absent in
+    /// checkpoints written before it could move)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    learning_rate_now: Option<f64>,
     ppo: PpoConfig,
 }
 
@@ -322,6 +326,11 @@ impl Trainer {
             rng_stream,
             rng_word_pos,
             weights_fnv1a64: format!("{:016x}", fnv1a64(&weights)),
+            learning_rate_now: self
+                .config
+                .desired_kl
+                .is_some()
+                .then_some(self.adam.learning_rate),
             ppo: self.config.clone(),
         };
         Ok(vec![
@@ -367,7 +376,18 @@ impl Trainer {
         file.load_vars(&trainer.policy.named_vars())?;
         let normalizer =
             file.load_normalizer(state.obs_size, state.normalizer_count, state.ppo.obs_clip)?;
-        let mut adam = Adam::new(trainer.policy.named_vars(), state.ppo.learning_rate)?;
+        let learning_rate = match (state.ppo.desired_kl, state.learning_rate_now) {
+            (Some(_), Some(lr)) if lr.is_finite() && lr > 0.0 => lr,
+            (Some(_), Some(lr)) => {
+                return Err(bad_file(
+                    &dir,
+                    STATE_FILE,
+                    format!("learning_rate_now = {lr}: must be finite and > 0"),
+                ));
+            }
+            _ => state.ppo.learning_rate,
+        };
+        let mut adam = Adam::new(trainer.policy.named_vars(), learning_rate)?;
         file.load_adam(&mut adam, "adam", state.adam_step)?;
         Ok(Trainer::from_parts(
             state.ppo,
@@ -559,6 +579,32 @@ mod tests {
 
     fn save(t: &Trainer, dir: &Path) {
         write_dir_atomically(dir, &t.checkpoint_files().unwrap()).unwrap();
+    }
+
+    #[test]
+    fn the_adaptive_learning_rate_survives_a_resume() {
+        let tmp = tempfile::tempdir().unwrap();
+        let mut t = trainer();
+        t.config.desired_kl = Some(0.01);
+        t.adam.learning_rate = 4.5e-4; // where the schedule has moved it
+        save(&t, &tmp.path().join("iter-3"));
+        let text = fs::read_to_string(tmp.path().join("iter-3").join(STATE_FILE)).unwrap();
+        assert!(text.contains("learning_rate_now = 0.00045"), "{text}");
+        let back = Trainer::load(&tmp.path().join("iter-3")).unwrap();
+        assert_eq!(back.adam.learning_rate, 4.5e-4);
+        assert_eq!(back.config.learning_rate, 2e-4); // the configured start
+        // a fixed rate writes no learning_rate_now and loads the configured one
+        let fixed = trainer();
+        save(&fixed, &tmp.path().join("iter-4"));
+        let text = fs::read_to_string(tmp.path().join("iter-4").join(STATE_FILE)).unwrap();
+        assert!(!text.contains("learning_rate_now"), "{text}");
+        assert_eq!(
+            Trainer::load(&tmp.path().join("iter-4"))
+                .unwrap()
+                .adam
+                .learning_rate,
+            2e-4
+        );
     }
 
     #[test]

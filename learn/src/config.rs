@@ -38,6 +38,12 @@ pub struct PpoConfig {
     /// stop the epochs of an iteration early once the approximate KL of a
     /// minibatch exceeds 1.5 x this (off when absent)
     pub target_kl: Option<f64>,
+    /// adapt the learning rate after every minibatch to keep the approximate
+    /// KL from the rollout policy near this (rsl_rl's schedule, legged_gym's
+    /// default with 0.01): above 2x this the rate is divided by 1.5, below
+    /// half of it multiplied by 1.5, within [1e-5, 1e-2]; `learning_rate` is
+    /// where it starts (off when absent: a fixed rate)
+    pub desired_kl: Option<f64>,
     /// initial log standard deviation of every action dimension. The
     /// default, -1.6 (sigma 0.2 of the [-1, 1] action range), is ours: with
     /// sigma 0.5 the untrained robot falls within 3 phases on rigid ground,
@@ -65,10 +71,30 @@ impl Default for PpoConfig {
             entropy_coef: 0.0,
             max_grad_norm: 1.0,
             target_kl: None,
+            desired_kl: None,
             init_log_std: -1.6,
             normalize_advantages: true,
             obs_clip: 10.0,
         }
+    }
+}
+
+/// The bounds of the adaptive learning rate ([`PpoConfig::desired_kl`]).
+pub const ADAPTIVE_LEARNING_RATE_RANGE: (f64, f64) = (1e-5, 1e-2);
+
+/// rsl_rl's adaptive schedule: the learning rate after a minibatch whose
+/// approximate KL from the rollout policy was `kl`.
+///
+/// lr / 1.5 if kl > 2 desired; lr x 1.5 if 0 < kl < desired / 2; else lr;
+/// kept within [`ADAPTIVE_LEARNING_RATE_RANGE`].
+pub fn adapt_learning_rate(learning_rate: f64, kl: f64, desired_kl: f64) -> f64 {
+    let (low, high) = ADAPTIVE_LEARNING_RATE_RANGE;
+    if kl > 2.0 * desired_kl {
+        (learning_rate / 1.5).max(low)
+    } else if kl > 0.0 && kl < desired_kl / 2.0 {
+        (learning_rate * 1.5).min(high)
+    } else {
+        learning_rate
     }
 }
 
@@ -138,6 +164,11 @@ impl PpoConfig {
         {
             return bad("target_kl", "finite and > 0", kl.to_string());
         }
+        if let Some(kl) = self.desired_kl
+            && !(kl.is_finite() && kl > 0.0)
+        {
+            return bad("desired_kl", "finite and > 0", kl.to_string());
+        }
         if !(self.init_log_std.is_finite() && (-10.0..=2.0).contains(&self.init_log_std)) {
             return bad("init_log_std", "in [-10, 2]", self.init_log_std.to_string());
         }
@@ -163,9 +194,29 @@ mod tests {
     }
 
     #[test]
+    fn the_adaptive_learning_rate_follows_rsl_rls_schedule() {
+        let d = 0.01;
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b;
+        assert!(close(adapt_learning_rate(3e-4, 0.03, d), 2e-4)); // KL > 2 d: / 1.5
+        assert!(close(adapt_learning_rate(2e-4, 0.004, d), 3e-4)); // KL < d / 2: x 1.5
+        assert_eq!(adapt_learning_rate(2e-4, 0.01, d), 2e-4); // within: kept
+        assert_eq!(adapt_learning_rate(2e-4, 0.02, d), 2e-4); // exactly 2 d: kept
+        assert_eq!(adapt_learning_rate(2e-4, 0.0, d), 2e-4); // no KL measured: kept
+        assert_eq!(adapt_learning_rate(1.2e-5, 1.0, d), 1e-5); // floor
+        assert_eq!(adapt_learning_rate(9e-3, 1e-6, d), 1e-2); // ceiling
+        let bad = PpoConfig {
+            desired_kl: Some(0.0),
+            ..PpoConfig::default()
+        };
+        let err = bad.validate().unwrap_err().to_string();
+        assert!(err.contains("ppo.desired_kl = 0"), "{err}");
+    }
+
+    #[test]
     fn toml_round_trip_and_unknown_keys() {
         let c = PpoConfig {
             target_kl: Some(0.02),
+            desired_kl: Some(0.01),
             ..PpoConfig::default()
         };
         let text = toml::to_string(&c).unwrap();

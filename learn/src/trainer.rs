@@ -18,7 +18,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::LearnError;
 use crate::buffer::RolloutBuffer;
-use crate::config::PpoConfig;
+use crate::config::{PpoConfig, adapt_learning_rate};
 use crate::env::{StepResult, VecEnv};
 use crate::gae::gae;
 use crate::normalizer::ObsNormalizer;
@@ -66,6 +66,9 @@ pub struct IterationStats {
     pub action_std: f64,
     /// epochs run (fewer than configured when the KL stop fired)
     pub epochs: usize,
+    /// the learning rate at the end of the update (moves with
+    /// `desired_kl`)
+    pub learning_rate: f64,
     /// seconds stepping the environments
     pub env_secs: f64,
     /// seconds in the network while collecting (inference)
@@ -394,6 +397,10 @@ impl Trainer {
                     *sum += value;
                 }
                 updates += 1;
+                if let Some(desired) = self.config.desired_kl {
+                    self.adam.learning_rate =
+                        adapt_learning_rate(self.adam.learning_rate, loss.approx_kl, desired);
+                }
                 if let Some(target) = self.config.target_kl
                     && loss.approx_kl > 1.5 * target
                 {
@@ -436,6 +443,7 @@ impl Trainer {
             action_std: log_std.iter().map(|s| f64::from(s.exp())).sum::<f64>()
                 / log_std.len() as f64,
             epochs: epochs_run,
+            learning_rate: self.adam.learning_rate,
             env_secs,
             inference_secs,
             update_secs,
@@ -507,6 +515,27 @@ mod tests {
         assert!((explained_variance(&returns, &returns) - 1.0).abs() < 1e-12);
         assert!(explained_variance(&[2.5; 4], &returns).abs() < 1e-12);
         assert_eq!(explained_variance(&[0.0; 3], &[1.0; 3]), 0.0);
+    }
+
+    #[test]
+    fn desired_kl_moves_the_learning_rate_within_its_bounds() {
+        let run = |desired_kl: Option<f64>| {
+            let config = PpoConfig {
+                hidden_sizes: vec![16],
+                minibatch_size: 64,
+                desired_kl,
+                ..PpoConfig::default()
+            };
+            let mut env = crate::toy::PointMass::new(4, 16);
+            let mut t = Trainer::new(config, env.observation_size(), env.action_size(), 3).unwrap();
+            let stats = t.iterate(&mut env).unwrap();
+            assert_eq!(stats.learning_rate, t.adam.learning_rate);
+            stats.learning_rate
+        };
+        // 10 epochs x 1 minibatch of 64: ten adaptations
+        assert_eq!(run(None), 2e-4); // fixed
+        assert_eq!(run(Some(1e-12)), 1e-5); // every KL above 2 d: down to the floor
+        assert_eq!(run(Some(1e3)), 1e-2); // every KL below d / 2: up to the ceiling
     }
 
     #[test]

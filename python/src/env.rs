@@ -219,9 +219,6 @@ impl Env {
     }
 }
 
-/// N tasks stepped in parallel in Rust (the GIL released), with
-/// Gymnasium's next-step autoreset: a step given to a task whose episode
-/// ended resets it instead (reward 0, not terminated, not truncated).
 /// When a finished task starts its next episode (Gymnasium's autoreset
 /// modes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -247,6 +244,10 @@ impl Autoreset {
     }
 }
 
+/// N tasks stepped in parallel in Rust (the GIL released), with
+/// Gymnasium's next-step autoreset (a step given to a task whose episode
+/// ended resets it instead: reward 0, not terminated, not truncated) or its
+/// same-step autoreset (the step that ends an episode starts the next one).
 #[pyclass(module = "quadwalk._quadwalk")]
 pub struct VecEnv {
     scene: Scene,

@@ -100,9 +100,13 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+# Ray's command line through this interpreter (not the venv's `ray` script,
+# whose first line names the interpreter by an absolute path).
+RAY = [sys.executable, "-m", "ray.scripts.scripts"]
+
+
 def ray_cmd(*args, env):
-    ray = os.path.join(os.path.dirname(sys.executable), "ray")
-    return subprocess.run([ray, *args], check=True, capture_output=True, text=True, env=env, timeout=180)
+    return subprocess.run([*RAY, *args], check=True, capture_output=True, text=True, env=env, timeout=180)
 
 
 def test_rllib_ppo_trains_on_a_two_node_ray_cluster(root, tmp_path):
@@ -136,7 +140,4 @@ def test_rllib_ppo_trains_on_a_two_node_ray_cluster(root, tmp_path):
         assert result["env_runner_nodes"][0] != result["head_node"], result
         assert (tmp_path / "rllib").is_dir()
     finally:
-        subprocess.run(
-            [os.path.join(os.path.dirname(sys.executable), "ray"), "stop", "--force"],
-            capture_output=True, env=env, timeout=120,
-        )
+        subprocess.run([*RAY, "stop", "--force"], capture_output=True, env=env, timeout=120)

@@ -5,6 +5,7 @@ env (quadwalk's worlds stepped in Rust, observations normalised by SB3's
 from __future__ import annotations
 
 import argparse
+import pathlib
 
 import numpy as np
 
@@ -39,6 +40,20 @@ def make_vec_env(args: argparse.Namespace):
         threads=args.threads,
     )
     return VecNormalize(env, norm_obs=True, norm_reward=False, clip_obs=10.0, gamma=0.95)
+
+
+def train_save_and_evaluate(model, env, args: argparse.Namespace) -> list[float]:
+    """Trains ``model`` for ``args.timesteps`` phases; with ``args.out``
+    saves ``model.zip`` and the observation normaliser ``vecnormalize.pkl``
+    there; then evaluates it (``evaluate``)."""
+    model.learn(total_timesteps=args.timesteps)
+    if args.out:
+        out = pathlib.Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        model.save(out / "model.zip")
+        env.save(str(out / "vecnormalize.pkl"))
+        print(f"saved {out / 'model.zip'} and {out / 'vecnormalize.pkl'}")
+    return evaluate(model, env, args)
 
 
 def evaluate(model, train_env, args: argparse.Namespace) -> list[float]:

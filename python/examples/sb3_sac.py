@@ -14,10 +14,9 @@ walked is printed.
 from __future__ import annotations
 
 import argparse
-import pathlib
 import sys
 
-from sb3_common import add_env_args, evaluate, make_vec_env
+from sb3_common import add_env_args, make_vec_env, train_save_and_evaluate
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -57,14 +56,7 @@ def main(argv: list[str] | None = None) -> int:
         device="cpu",
         verbose=1,
     )
-    model.learn(total_timesteps=args.timesteps)
-    if args.out:
-        out = pathlib.Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        model.save(out / "model.zip")
-        env.save(str(out / "vecnormalize.pkl"))
-        print(f"saved {out / 'model.zip'} and {out / 'vecnormalize.pkl'}")
-    evaluate(model, env, args)
+    train_save_and_evaluate(model, env, args)
     return 0
 
 

@@ -30,6 +30,8 @@
 //! [[curriculum]]
 //! terrain = "elastic:5cm"
 //! iterations = 100
+//! learning_rate = 5e-5    # optional: the learner's rate in this stage (stages
+//!                         # without one use [ppo]/[sac]'s; not with desired_kl)
 //! ```
 //!
 //! ```toml
@@ -269,6 +271,9 @@ pub struct Stage {
     pub terrain: TerrainSpec,
     /// iterations in this stage
     pub iterations: u64,
+    /// the learner's learning rate in this stage (`None`: the `[ppo]` or
+    /// `[sac]` one)
+    pub learning_rate: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -276,6 +281,8 @@ pub struct Stage {
 struct StageSection {
     terrain: String,
     iterations: u64,
+    #[serde(default)]
+    learning_rate: Option<f64>,
 }
 
 impl Experiment {
@@ -368,7 +375,7 @@ impl Experiment {
         };
         let sac = sac_settings(algo, sac_table.as_ref())
             .map_err(|e| anyhow!("config {source} [sac]: {e}"))?;
-        Ok(Self {
+        let experiment = Self {
             terrain,
             task,
             physics,
@@ -378,7 +385,9 @@ impl Experiment {
             sac_table: SacTable(sac_table),
             train,
             curriculum,
-        })
+        };
+        experiment.check_stage_rates(&format!("config {source}"))?;
+        Ok(experiment)
     }
 
     /// Switches the learner (`--algo`): the SAC settings become the
@@ -387,7 +396,7 @@ impl Experiment {
         self.sac = sac_settings(algo, self.sac_table.0.as_ref())
             .map_err(|e| anyhow!("--algo {}: [sac]: {e}", algo.name()))?;
         self.algo = algo;
-        Ok(())
+        self.check_stage_rates(&format!("--algo {}", algo.name()))
     }
 
     /// The experiment for a terrain spec with every other setting at its
@@ -428,6 +437,38 @@ impl Experiment {
             Some(last) => (self.curriculum.len() - 1, &last.terrain),
             None => (0, &self.terrain),
         }
+    }
+
+    /// The learning rate of 0-based iteration `iteration` when a curriculum
+    /// stage sets one: that stage's, or for a stage that does not, the
+    /// learner's configured rate. `None` when no stage sets one (the learner
+    /// keeps its own rate, which `[ppo] desired_kl` may move).
+    pub fn learning_rate_at(&self, iteration: u64) -> Option<f64> {
+        if self.curriculum.iter().all(|s| s.learning_rate.is_none()) {
+            return None;
+        }
+        let (stage, _) = self.terrain_at(iteration);
+        Some(
+            self.curriculum[stage]
+                .learning_rate
+                .unwrap_or(match self.algo {
+                    Algo::Ppo => self.ppo.learning_rate,
+                    Algo::Sac | Algo::CrossQ => self.sac.learning_rate,
+                }),
+        )
+    }
+
+    /// Stage learning rates and PPO's adaptive rate exclude each other.
+    fn check_stage_rates(&self, source: &str) -> Result<()> {
+        if self.algo == Algo::Ppo
+            && self.ppo.desired_kl.is_some()
+            && self.curriculum.iter().any(|s| s.learning_rate.is_some())
+        {
+            bail!(
+                "{source}: [[curriculum]] stages set learning_rate and [ppo] sets desired_kl, which moves the rate itself; keep one of the two"
+            );
+        }
+        Ok(())
     }
 
     /// The whole experiment as TOML, every value spelt out; parsing it
@@ -490,6 +531,9 @@ impl Experiment {
                 stage.terrain.to_string(),
                 stage.iterations
             ));
+            if let Some(rate) = stage.learning_rate {
+                text.push_str(&format!("learning_rate = {rate:?}\n"));
+            }
         }
         text
     }
@@ -519,11 +563,20 @@ fn curriculum_from_doc(doc: &toml::Table, source: &str, registry: &Registry) -> 
                     k + 1
                 );
             }
+            if let Some(rate) = stage.learning_rate
+                && !(rate.is_finite() && rate > 0.0)
+            {
+                bail!(
+                    "config {source} [[curriculum]] stage {}: learning_rate = {rate}: must be finite and > 0",
+                    k + 1
+                );
+            }
             Ok(Stage {
                 terrain: registry
                     .parse(&stage.terrain)
                     .with_context(|| format!("config {source} [[curriculum]] stage {}", k + 1))?,
                 iterations: stage.iterations,
+                learning_rate: stage.learning_rate,
             })
         })
         .collect()
@@ -913,8 +966,25 @@ mod tests {
         assert_eq!(e.terrain_at(2).0, 0);
         assert_eq!(e.terrain_at(3).1.to_string(), "elastic:5cm");
         assert_eq!(e.terrain_at(99).0, 1);
+        assert_eq!(e.learning_rate_at(0), None); // no stage sets one
         let back = Experiment::from_toml_builtin(&e.to_toml(), "resolved").unwrap();
         assert_eq!(back, e);
+        // a stage's own learning rate; the others run at [ppo]'s
+        let staged = text.replace("iterations = 2\n", "iterations = 2\nlearning_rate = 5e-5\n");
+        let e = Experiment::from_toml_builtin(&staged, "c.toml").unwrap();
+        assert_eq!(e.curriculum[1].learning_rate, Some(5e-5));
+        assert_eq!(e.learning_rate_at(0), Some(1e-3));
+        assert_eq!(e.learning_rate_at(3), Some(5e-5));
+        assert_eq!(e.learning_rate_at(99), Some(5e-5));
+        assert!(
+            e.to_toml().contains("learning_rate = 5e-5\n"),
+            "{}",
+            e.to_toml()
+        );
+        assert_eq!(
+            Experiment::from_toml_builtin(&e.to_toml(), "resolved").unwrap(),
+            e
+        );
         let plain = Experiment::for_terrain(Registry::builtin().parse("rigid").unwrap());
         assert_eq!(
             Experiment::from_toml_builtin(&plain.to_toml(), "r").unwrap(),
@@ -1041,25 +1111,32 @@ mod tests {
         let rigid = get("rigid");
         assert_eq!(rigid.task, default_task());
         assert_eq!(rigid.ppo, default_ppo());
-        // the 5 cm curriculum starts as the rigid recipe and deepens the tiles
+        // the 5 cm curriculum starts as the rigid recipe, deepens the tiles,
+        // then steps the learning rate down on 5 cm tiles
         let deepening = get("elastic-5cm-curriculum");
         assert_eq!((&deepening.task, &deepening.ppo), (&rigid.task, &rigid.ppo));
-        let stages: Vec<String> = deepening
+        let stages: Vec<(String, Option<f64>)> = deepening
             .curriculum
             .iter()
-            .map(|s| s.terrain.to_string())
+            .map(|s| (s.terrain.to_string(), s.learning_rate))
             .collect();
+        let expected = [
+            ("rigid", None),
+            ("elastic:2cm", None),
+            ("elastic:3cm", None),
+            ("elastic:4cm", None),
+            ("elastic:5cm", None),
+            ("elastic:5cm", Some(1e-4)),
+            ("elastic:5cm", Some(5e-5)),
+            ("elastic:5cm", Some(2e-5)),
+        ];
         assert_eq!(
             stages,
-            [
-                "rigid",
-                "elastic:2cm",
-                "elastic:3cm",
-                "elastic:4cm",
-                "elastic:5cm"
-            ]
+            expected.map(|(t, r)| (t.to_string(), r)),
+            "{stages:?}"
         );
         assert_eq!(deepening.curriculum[0].iterations, rigid.train.iterations);
+        assert_eq!(deepening.learning_rate_at(0), Some(rigid.ppo.learning_rate));
     }
 
     #[test]
@@ -1115,6 +1192,18 @@ mod tests {
                 "at least 1",
             ),
             ("[[curriculum]]\nterrain = \"rigid\"\n", "iterations"),
+            (
+                "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\nlearning_rate = 0.0\n",
+                "stage 1: learning_rate = 0: must be finite and > 0",
+            ),
+            (
+                "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\nlearning_rate = 1e-4\n[ppo]\ndesired_kl = 0.01\n",
+                "keep one of the two",
+            ),
+            (
+                "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\nlearing_rate = 1e-4\n",
+                "unknown field `learing_rate`",
+            ),
         ] {
             let err = format!(
                 "{:#}",

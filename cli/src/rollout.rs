@@ -203,6 +203,8 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
         .map(|(n, v)| (n.to_string(), json!(v)))
         .collect();
     let height = stats(&heights);
+    // a fall within 1 m of the field's far end: walked off a field too short
+    let at_terrain_end = termination.is_some() && crate::eval::record::near_terrain_end(&task);
     if args.flags.json {
         let terminated = match &termination {
             None => json!(false),
@@ -220,6 +222,7 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
             "final_yaw_deg": yaw.to_degrees(),
             "terminated": terminated,
             "termination_detail": termination.as_ref().map(ToString::to_string),
+            "at_terrain_end": at_terrain_end,
             "goals_reached": task.goals_reached(),
             "reward_total": reward_sum,
             "reward_terms": reward_terms,
@@ -247,7 +250,17 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
         out!("goals reached   {}", task.goals_reached());
         let ended = termination
             .as_ref()
-            .map_or("no (ran all phases)".to_string(), |t| format!("yes: {t}"));
+            .map_or("no (ran all phases)".to_string(), |t| {
+                if at_terrain_end {
+                    format!(
+                        "yes: {t}, at the end of the terrain (x = {:.1} m): the field is too short for {} phases; give it a longer one (e.g. length=40m on a tile terrain)",
+                        task.world().terrain().extent().max_m[0],
+                        args.phases
+                    )
+                } else {
+                    format!("yes: {t}")
+                }
+            });
         out!("terminated      {ended}");
         out!(
             "base height     mean {:.3} m, std {:.3} m, min {min_h:.3} m, max {max_h:.3} m",

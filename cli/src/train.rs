@@ -359,7 +359,18 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
                 env.attach_logger(l.env, l.logger);
             }
             stage = next_stage;
-            eprintln!("curriculum stage {}: {terrain}", stage + 1);
+            match experiment.learning_rate_at(iteration) {
+                Some(rate) => eprintln!(
+                    "curriculum stage {}: {terrain}, learning rate {rate:e}",
+                    stage + 1
+                ),
+                None => eprintln!("curriculum stage {}: {terrain}", stage + 1),
+            }
+        }
+        // a stage's own learning rate (set every iteration, so a resume
+        // inside a stage runs as the uninterrupted run did)
+        if let Some(rate) = experiment.learning_rate_at(iteration) {
+            trainer.set_learning_rate(rate)?;
         }
         for l in env.loggers_mut() {
             l.logger.set_iteration(Some(iteration as i64));

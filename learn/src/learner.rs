@@ -142,6 +142,15 @@ impl Learner {
         }
     }
 
+    /// Sets the learning rate from the next update on (see
+    /// [`Trainer::set_learning_rate`], [`SacAgent::set_learning_rate`]).
+    pub fn set_learning_rate(&mut self, learning_rate: f64) -> Result<(), LearnError> {
+        match self {
+            Self::Ppo(t) => t.set_learning_rate(learning_rate),
+            Self::Sac(a) => a.set_learning_rate(learning_rate),
+        }
+    }
+
     /// The deterministic action (PPO: the clipped mean; SAC: tanh of the mean).
     pub fn act_deterministic(&self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError> {
         match self {
@@ -229,6 +238,81 @@ impl LearnerStats {
         match self {
             Self::Ppo(s) => s.steps_per_sec,
             Self::Sac(s) => s.steps_per_sec,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::checkpoint::write_dir_atomically;
+    use crate::config::PpoConfig;
+    use crate::sac::SacConfig;
+    use crate::toy::PointMass;
+    use crate::trainer::Trainer;
+
+    /// A curriculum stage's rate: used by the next update, written into the
+    /// checkpoint and loaded back; a bad rate is refused and changes nothing.
+    #[test]
+    fn a_new_learning_rate_is_used_and_survives_a_checkpoint() {
+        let tmp = tempfile::tempdir().unwrap();
+        let ppo = Learner::Ppo(Box::new(
+            Trainer::new(
+                PpoConfig {
+                    hidden_sizes: vec![8],
+                    minibatch_size: 64,
+                    ..PpoConfig::default()
+                },
+                4,
+                2,
+                3,
+            )
+            .unwrap(),
+        ));
+        let sac = Learner::Sac(Box::new(
+            SacAgent::new(
+                SacConfig {
+                    hidden_sizes: vec![8],
+                    batch_size: 8,
+                    learning_starts: 8,
+                    steps_per_env: 4,
+                    ..SacConfig::default()
+                },
+                4,
+                2,
+                3,
+            )
+            .unwrap(),
+        ));
+        for (k, mut learner) in [ppo, sac].into_iter().enumerate() {
+            for bad in [0.0, -1e-4, f64::NAN, f64::INFINITY] {
+                let err = learner.set_learning_rate(bad).unwrap_err().to_string();
+                assert!(err.contains("learning_rate"), "{err}");
+            }
+            learner.set_learning_rate(5e-5).unwrap();
+            let mut env = PointMass::new(4, 16);
+            let stats = learner.iterate(&mut env).unwrap();
+            let rates = |l: &Learner| match l {
+                Learner::Ppo(t) => vec![t.config.learning_rate, t.adam.learning_rate],
+                Learner::Sac(a) => vec![
+                    a.config.learning_rate,
+                    a.actor_adam.learning_rate,
+                    a.critic_adam.learning_rate,
+                    a.alpha_adam.learning_rate,
+                ],
+            };
+            assert!(rates(&learner).iter().all(|&r| r == 5e-5));
+            if let LearnerStats::Ppo(s) = &stats {
+                assert_eq!(s.learning_rate, 5e-5);
+            }
+            let dir = tmp.path().join(format!("learner-{k}"));
+            write_dir_atomically(&dir, &learner.checkpoint_files().unwrap()).unwrap();
+            let back = Learner::load(&dir).unwrap();
+            assert!(
+                rates(&back).iter().all(|&r| r == 5e-5),
+                "{:?}",
+                rates(&back)
+            );
         }
     }
 }

@@ -46,6 +46,17 @@ pub fn clip_grad_norm(grads: &mut [Tensor], max_norm: f64) -> Result<f64, LearnE
     Ok(norm)
 }
 
+/// A learning rate must be finite and positive.
+pub fn check_learning_rate(learning_rate: f64) -> Result<(), LearnError> {
+    if learning_rate.is_finite() && learning_rate > 0.0 {
+        Ok(())
+    } else {
+        Err(LearnError::Config(format!(
+            "learning_rate = {learning_rate}: must be finite and > 0"
+        )))
+    }
+}
+
 /// Adam (Kingma and Ba), with bias correction, no weight decay.
 #[derive(Debug, Clone)]
 pub struct Adam {

@@ -22,7 +22,7 @@ use crate::config::{PpoConfig, adapt_learning_rate};
 use crate::env::{StepResult, VecEnv};
 use crate::gae::gae;
 use crate::normalizer::ObsNormalizer;
-use crate::optim::{Adam, clip_grad_norm, gradients};
+use crate::optim::{Adam, check_learning_rate, clip_grad_norm, gradients};
 use crate::policy::ActorCritic;
 use crate::ppo::{Minibatch, ppo_loss};
 
@@ -174,6 +174,15 @@ impl Trainer {
             iteration,
             rng: generator,
         }
+    }
+
+    /// Sets the learning rate from the next update on (the configured one
+    /// too, so checkpoints carry it): a curriculum stage's own rate.
+    pub fn set_learning_rate(&mut self, learning_rate: f64) -> Result<(), LearnError> {
+        check_learning_rate(learning_rate)?;
+        self.config.learning_rate = learning_rate;
+        self.adam.learning_rate = learning_rate;
+        Ok(())
     }
 
     /// The sampling RNG's position.

@@ -127,6 +127,40 @@ fn a_fall_is_counted_by_cause_like_the_rollout_ends() {
     assert_eq!(e["episodes"][0]["fall"]["terrain"], "rigid");
 }
 
+/// The crawl on a 3 m field (tiles end at x = 1.5 m) walks off its end: a
+/// fall, marked as at the end of the terrain by eval and rollout alike; a
+/// fall far from the end (above) is not.
+#[test]
+fn walking_off_a_short_field_is_marked_as_the_end_of_the_terrain() {
+    let out = scratch_dir("eval-field-end");
+    let scene = ["--terrain", "varying:2m:rigid:length=3m:back=1.5m"];
+    let mut args = vec!["--episodes", "1", "--phases", "300", "--seed", "3"];
+    args.extend_from_slice(&scene);
+    let e = eval_json(&args, &out);
+    assert_episodes_are_rollouts(&e, "scripted", &scene, "300");
+    let fall = &e["episodes"][0]["fall"];
+    assert_eq!(fall["at_terrain_end"], true, "{fall}");
+    assert_eq!(e["summary"]["falls_at_terrain_end"], 1);
+    let r = json_of(&[
+        "rollout", "--policy", "scripted", scene[0], scene[1], "--phases", "300", "--seed", "3",
+        "--json",
+    ]);
+    assert_eq!(r["at_terrain_end"], true, "{r}");
+    assert!(r["distance_m"].as_f64().unwrap() > 0.5, "{r}");
+
+    let near = scratch_dir("eval-fall-not-at-end");
+    let config = scratch_file(
+        "eval-fall-near.toml",
+        "[terrain]\nspec = \"elastic:2cm\"\n\n[task]\nmin_base_height_m = 0.40\n",
+    );
+    let e = eval_json(
+        &["--episodes", "1", "--phases", "5", "--config", s(&config)],
+        &near,
+    );
+    assert_eq!(e["episodes"][0]["fall"]["at_terrain_end"], false);
+    assert_eq!(e["summary"]["falls_at_terrain_end"], 0);
+}
+
 #[test]
 fn a_trained_policy_evaluates_like_it_rolls_out_and_misfits_are_refused() {
     let dir = scratch_dir("eval-trained");

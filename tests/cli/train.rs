@@ -205,6 +205,63 @@ fn same_seed_same_training_and_resume_continues_bit_for_bit() {
     );
 }
 
+/// A curriculum stage's learning rate: the stage runs at it, the stage
+/// without one at `[ppo]`'s, and a resume at the stage boundary (whose
+/// checkpoint holds the first stage's rate) continues bit for bit.
+#[test]
+fn a_curriculum_stage_sets_its_learning_rate_and_resumes_exactly() {
+    let dir = scratch_dir("stage-rate");
+    let text = TINY.replace(
+        "[train]",
+        "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\nlearning_rate = 5e-5\n\n[train]",
+    );
+    let config = dir.join("staged.toml");
+    std::fs::write(&config, text).unwrap();
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let train = |run: &Path| {
+        ok(&[
+            "train",
+            "--config",
+            s(&config),
+            "--run-dir",
+            s(run),
+            "--threads",
+            "2",
+            "--rerun",
+            "off",
+        ])
+    };
+    let log = train(&a);
+    assert!(
+        log.contains("curriculum stage 2: rigid, learning rate 5e-5"),
+        "{log}"
+    );
+    let rates: Vec<f64> = metrics_without_timing(&a)
+        .iter()
+        .map(|m| m["learning_rate"].as_f64().unwrap())
+        .collect();
+    assert_eq!(rates, [2e-4, 2e-4, 5e-5, 5e-5]);
+
+    // b: the same run, stopped after stage 1 (copied from a's checkpoint of
+    // iteration 2) and resumed
+    train(&b);
+    std::fs::remove_dir_all(b.join("checkpoints/iter-000003")).unwrap();
+    std::fs::remove_dir_all(b.join("checkpoints/iter-000004")).unwrap();
+    let state = std::fs::read_to_string(b.join("checkpoints/iter-000002/state.toml")).unwrap();
+    assert!(state.contains("learning_rate = 0.0002"), "{state}");
+    ok(&[
+        "train",
+        "--resume",
+        s(&b.join("checkpoints/iter-000002")),
+        "--threads",
+        "2",
+        "--rerun",
+        "off",
+    ]);
+    assert_eq!(weights(&a), weights(&b), "the resumed stage 2 differs");
+    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+}
+
 /// [`TINY`] learned by SAC: learning starts after 8 transitions.
 const TINY_SAC: &str = "\n[algo]\nname = \"sac\"\n\n[sac]\nhidden_sizes = [16]\nbatch_size = 8\nlearning_starts = 8\nsteps_per_env = 4\nbuffer_size = 1000\n";
 

@@ -10,7 +10,7 @@
 
 mod compare;
 mod plots;
-mod record;
+pub(crate) mod record;
 mod summary;
 mod table1;
 
@@ -258,7 +258,7 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
                             record
                                 .fall
                                 .as_ref()
-                                .map_or(String::new(), |f| format!(", fell: {}", f.detail))
+                                .map_or(String::new(), |f| format!(", fell: {}", f.describe()))
                         );
                     }
                     Ok(record)
@@ -478,6 +478,13 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
             .map(|(l, n)| format!("{l} {n}"))
             .collect();
         out!("  by link       {}", links.join(", "));
+    }
+    if s.falls_at_terrain_end > 0 {
+        out!(
+            "  at the end    {} at the far end of the terrain: the robot walked off a field too short for {} phases; give it a longer one (e.g. length=40m on a tile terrain)",
+            s.falls_at_terrain_end,
+            report.max_phases
+        );
     }
     out!("per terrain type");
     out!(

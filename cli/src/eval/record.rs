@@ -84,6 +84,34 @@ pub struct Fall {
     pub phase: usize,
     /// the terrain type of that phase
     pub terrain: String,
+    /// the base was within [`TERRAIN_END_MARGIN_M`] of the terrain's far
+    /// end: the robot walked off the field (too short for the episode)
+    /// rather than falling on it
+    #[serde(default)]
+    pub at_terrain_end: bool,
+}
+
+/// How close to the terrain's far end (its extent's largest x) a fall counts
+/// as walking off the field: the front feet reach ~0.4 m ahead of the base,
+/// and a step is ~0.1 m.
+pub const TERRAIN_END_MARGIN_M: f64 = 1.0;
+
+/// Whether the base is within [`TERRAIN_END_MARGIN_M`] of the far end of
+/// `task`'s terrain.
+pub fn near_terrain_end(task: &Task) -> bool {
+    let base_x_m = task.world().base_pose().translation.vector.x;
+    base_x_m >= task.world().terrain().extent().max_m[0] - TERRAIN_END_MARGIN_M
+}
+
+impl Fall {
+    /// The detail, with where it happened when that was the terrain's end.
+    pub fn describe(&self) -> String {
+        if self.at_terrain_end {
+            format!("{} at the end of the terrain", self.detail)
+        } else {
+            self.detail.clone()
+        }
+    }
 }
 
 /// One phase of an episode.
@@ -334,6 +362,7 @@ impl PhaseObserver for EpisodeRecorder {
                 },
                 phase: self.phase_log.len() - 1,
                 terrain: label,
+                at_terrain_end: near_terrain_end(task),
             });
         }
     }

@@ -168,6 +168,10 @@ pub struct Summary {
     pub falls_by_cause: BTreeMap<String, usize>,
     /// non-foot contacts that ended an episode, by link
     pub falls_by_link: BTreeMap<String, usize>,
+    /// falls at the terrain's far end (walked off a field too short for
+    /// the episode), counted in the causes above too
+    #[serde(default)]
+    pub falls_at_terrain_end: usize,
     /// every terrain type pooled ([`ALL_TERRAIN`]), then each type by label
     pub terrain_types: Vec<TerrainSummary>,
 }
@@ -181,7 +185,9 @@ impl Summary {
         let successes = episodes.iter().filter(|e| e.succeeded()).count();
         let mut falls_by_cause = BTreeMap::new();
         let mut falls_by_link = BTreeMap::new();
+        let mut falls_at_terrain_end = 0;
         for fall in episodes.iter().filter_map(|e| e.fall.as_ref()) {
+            falls_at_terrain_end += usize::from(fall.at_terrain_end);
             *falls_by_cause.entry(fall.cause.clone()).or_default() += 1;
             for link in &fall.links {
                 *falls_by_link.entry(link.clone()).or_default() += 1;
@@ -216,6 +222,7 @@ impl Summary {
             mean_torque_n_m: column(&|e| e.mean_torque_n_m),
             falls_by_cause,
             falls_by_link,
+            falls_at_terrain_end,
             terrain_types,
         }
     }
@@ -276,6 +283,7 @@ mod tests {
                 links: links.iter().map(|l| l.to_string()).collect(),
                 phase: terrains.len() - 1,
                 terrain: last,
+                at_terrain_end: false,
             }
         });
         EpisodeRecord {
@@ -315,7 +323,17 @@ mod tests {
             crafted(2, &["elastic:5cm"], Some(("base_too_low", &[]))),
             crafted(3, &["rigid", "rigid", "rigid"], None),
         ];
+        let mut episodes = episodes;
+        // episode 2 fell where the field ends: a fall, and counted as such
+        let end = episodes[2].fall.as_mut().unwrap();
+        end.at_terrain_end = true;
+        assert_eq!(end.describe(), "base_too_low at the end of the terrain");
+        assert_eq!(
+            episodes[1].fall.as_ref().unwrap().describe(),
+            "non_foot_contact"
+        );
         let s = Summary::of(&episodes, 0.75);
+        assert_eq!(s.falls_at_terrain_end, 1);
         assert_eq!(s.episodes, 4);
         assert_eq!(s.successes, 2);
         assert_eq!(s.success_rate, 0.5);

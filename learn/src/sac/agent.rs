@@ -476,6 +476,22 @@ impl SacAgent {
         self.rng = rng;
     }
 
+    /// Sets the learning rate of the actor, critic and temperature optimisers
+    /// from the next update on (the configured one too, so checkpoints carry
+    /// it): a curriculum stage's own rate.
+    pub fn set_learning_rate(&mut self, learning_rate: f64) -> Result<(), LearnError> {
+        crate::optim::check_learning_rate(learning_rate)?;
+        self.config.learning_rate = learning_rate;
+        for adam in [
+            &mut self.actor_adam,
+            &mut self.critic_adam,
+            &mut self.alpha_adam,
+        ] {
+            adam.learning_rate = learning_rate;
+        }
+        Ok(())
+    }
+
     /// The number of observation values.
     pub fn obs_size(&self) -> usize {
         self.obs_size

@@ -563,13 +563,9 @@ fn curriculum_from_doc(doc: &toml::Table, source: &str, registry: &Registry) -> 
                     k + 1
                 );
             }
-            if let Some(rate) = stage.learning_rate
-                && !(rate.is_finite() && rate > 0.0)
-            {
-                bail!(
-                    "config {source} [[curriculum]] stage {}: learning_rate = {rate}: must be finite and > 0",
-                    k + 1
-                );
+            if let Some(rate) = stage.learning_rate {
+                learn::optim::check_learning_rate(rate)
+                    .map_err(|e| anyhow!("config {source} [[curriculum]] stage {}: {e}", k + 1))?;
             }
             Ok(Stage {
                 terrain: registry

@@ -253,9 +253,9 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
             .map_or("no (ran all phases)".to_string(), |t| {
                 if at_terrain_end {
                     format!(
-                        "yes: {t}, at the end of the terrain (x = {:.1} m): the field is too short for {} phases; give it a longer one (e.g. length=40m on a tile terrain)",
+                        "yes: {t}, at the end of the terrain (x = {:.1} m): {}",
                         task.world().terrain().extent().max_m[0],
-                        args.phases
+                        crate::eval::record::terrain_end_advice(args.phases)
                     )
                 } else {
                     format!("yes: {t}")

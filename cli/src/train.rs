@@ -352,6 +352,7 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
     let mut phases_done = 0usize;
     for iteration in start_iteration..total {
         let (next_stage, terrain) = experiment.terrain_at(iteration);
+        let stage_rate = experiment.learning_rate_at(iteration);
         if next_stage != stage {
             let loggers = env.detach_loggers();
             env = build_env(terrain)?;
@@ -359,7 +360,7 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
                 env.attach_logger(l.env, l.logger);
             }
             stage = next_stage;
-            match experiment.learning_rate_at(iteration) {
+            match stage_rate {
                 Some(rate) => eprintln!(
                     "curriculum stage {}: {terrain}, learning rate {rate:e}",
                     stage + 1
@@ -369,7 +370,7 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
         }
         // a stage's own learning rate (set every iteration, so a resume
         // inside a stage runs as the uninterrupted run did)
-        if let Some(rate) = experiment.learning_rate_at(iteration) {
+        if let Some(rate) = stage_rate {
             trainer.set_learning_rate(rate)?;
         }
         for l in env.loggers_mut() {

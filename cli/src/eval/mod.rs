@@ -481,9 +481,9 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
     }
     if s.falls_at_terrain_end > 0 {
         out!(
-            "  at the end    {} at the far end of the terrain: the robot walked off a field too short for {} phases; give it a longer one (e.g. length=40m on a tile terrain)",
+            "  at the end    {} at the far end of the terrain (walked off it): {}",
             s.falls_at_terrain_end,
-            report.max_phases
+            record::terrain_end_advice(report.max_phases)
         );
     }
     out!("per terrain type");

@@ -103,6 +103,14 @@ pub fn near_terrain_end(task: &Task) -> bool {
     base_x_m >= task.world().terrain().extent().max_m[0] - TERRAIN_END_MARGIN_M
 }
 
+/// What to do about a fall at the terrain's end, for an episode of
+/// `phases` phases.
+pub fn terrain_end_advice(phases: impl std::fmt::Display) -> String {
+    format!(
+        "the field is too short for {phases} phases; give it a longer one (e.g. length=40m on a tile terrain)"
+    )
+}
+
 impl Fall {
     /// The detail, with where it happened when that was the terrain's end.
     pub fn describe(&self) -> String {

@@ -32,6 +32,9 @@
 //! iterations = 100
 //! learning_rate = 5e-5    # optional: the learner's rate in this stage (stages
 //!                         # without one use [ppo]/[sac]'s; not with desired_kl)
+//! [curriculum.task]       # optional: [task] keys for this stage only, on top of
+//! max_paid_progress_m = 0.03  # [task] (not observation or action_prior: the
+//!                         # networks' input is fixed for a run)
 //! ```
 //!
 //! ```toml
@@ -42,6 +45,8 @@
 //! distance_reward = "new_ground" # quadwalk's default; "progress" is the paper's; or "forward", "tracking"
 //! forward_reward_per_m = 40.0    # R_d per metre with "forward" (both ways)
 //! target_progress_m = 0.025      # the pace per phase "tracking" pays most for
+//! max_paid_progress_m = 0.04     # optional: "new_ground" pays at most this much
+//!                                # new ground per phase (a pace cap), m
 //! balance_terms = "penalty"      # quadwalk's default: R_o, R_s, R_t, R_r shifted by
 //!                                # their best value (standing earns ~0); "paper": the paper's
 //! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
@@ -274,6 +279,11 @@ pub struct Stage {
     /// the learner's learning rate in this stage (`None`: the `[ppo]` or
     /// `[sac]` one)
     pub learning_rate: Option<f64>,
+    /// the stage's `[curriculum.task]` keys, as written (empty: none)
+    pub task_overrides: toml::Table,
+    /// the task of this stage: `[task]` with the overrides on top (`None`:
+    /// `[task]`'s)
+    pub task: Option<TaskConfig>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -283,7 +293,13 @@ struct StageSection {
     iterations: u64,
     #[serde(default)]
     learning_rate: Option<f64>,
+    #[serde(default)]
+    task: Option<toml::Table>,
 }
+
+/// `[curriculum.task]` keys that would change the networks' input (the
+/// observation), which is fixed for a run.
+const FIXED_TASK_KEYS: [&str; 2] = ["observation", "action_prior"];
 
 impl Experiment {
     /// Reads an experiment file; its terrain specs are parsed with `registry`.
@@ -307,7 +323,12 @@ impl Experiment {
                 );
             }
         }
-        let curriculum = curriculum_from_doc(&doc, source, registry)?;
+        let task_table = match doc.get("task") {
+            None => toml::Table::new(),
+            Some(toml::Value::Table(table)) => table.clone(),
+            Some(_) => bail!("config {source} [task]: must be a table"),
+        };
+        let curriculum = curriculum_from_doc(&doc, &task_table, source, registry)?;
         let terrain = match (doc.get("terrain"), curriculum.first()) {
             (None, Some(first)) => first.terrain.clone(),
             _ => terrain_from_table(&doc, source, registry)?,
@@ -349,18 +370,7 @@ impl Experiment {
         train
             .validate()
             .with_context(|| format!("config {source} [train]"))?;
-        let task = match doc.get("task") {
-            None => default_task(),
-            Some(value) => {
-                let section: TaskSection =
-                    value.clone().try_into().map_err(|e: toml::de::Error| {
-                        anyhow!("config {source} [task]: {}", e.message())
-                    })?;
-                section
-                    .resolve()
-                    .map_err(|e| anyhow!("config {source} [task]: {e}"))?
-            }
-        };
+        let task = resolve_task(&task_table).map_err(|e| anyhow!("config {source} [task]: {e}"))?;
         let physics = match doc.get("physics") {
             None => WorldConfig::default(),
             Some(value) => {
@@ -458,6 +468,16 @@ impl Experiment {
         )
     }
 
+    /// The task of 0-based iteration `iteration`: its curriculum stage's
+    /// when the stage sets `[curriculum.task]` keys, else `[task]`.
+    pub fn task_at(&self, iteration: u64) -> &TaskConfig {
+        if self.curriculum.is_empty() {
+            return &self.task;
+        }
+        let (stage, _) = self.terrain_at(iteration);
+        self.curriculum[stage].task.as_ref().unwrap_or(&self.task)
+    }
+
     /// Stage learning rates and PPO's adaptive rate exclude each other.
     fn check_stage_rates(&self, source: &str) -> Result<()> {
         if self.algo == Algo::Ppo
@@ -477,7 +497,7 @@ impl Experiment {
         let t = &self.task;
         let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\n{}balance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
             self.terrain.to_string(),
             t.goal_spacing_m,
             t.goal_reached_m,
@@ -493,6 +513,9 @@ impl Experiment {
             t.distance_reward.name(),
             t.forward_reward_per_m,
             t.target_progress_m,
+            t.max_paid_progress_m.map_or(String::new(), |cap| format!(
+                "max_paid_progress_m = {cap:?}\n"
+            )),
             t.balance_terms.name(),
             t.action_prior.name(),
             o.foot_history,
@@ -534,13 +557,46 @@ impl Experiment {
             if let Some(rate) = stage.learning_rate {
                 text.push_str(&format!("learning_rate = {rate:?}\n"));
             }
+            if !stage.task_overrides.is_empty() {
+                text.push_str("\n[curriculum.task]\n");
+                text.push_str(&toml::to_string(&stage.task_overrides).expect("a table serialises"));
+            }
         }
         text
     }
 }
 
-/// Reads `[[curriculum]]`; `source` names the file in errors.
-fn curriculum_from_doc(doc: &toml::Table, source: &str, registry: &Registry) -> Result<Vec<Stage>> {
+/// `[task]`'s table resolved over [`default_task`].
+fn resolve_task(table: &toml::Table) -> Result<TaskConfig, String> {
+    let section: TaskSection = toml::Value::Table(table.clone())
+        .try_into()
+        .map_err(|e: toml::de::Error| e.message().to_string())?;
+    section.resolve()
+}
+
+/// A stage's task: `[task]`'s keys with the stage's `[curriculum.task]`
+/// keys on top; keys that change the observation are refused.
+fn stage_task(task_table: &toml::Table, overrides: &toml::Table) -> Result<TaskConfig, String> {
+    if let Some(key) = FIXED_TASK_KEYS.iter().find(|k| overrides.contains_key(**k)) {
+        return Err(format!(
+            "{key} cannot change between stages (it sets the networks' input); set it in [task]"
+        ));
+    }
+    let mut merged = task_table.clone();
+    for (key, value) in overrides {
+        merged.insert(key.clone(), value.clone());
+    }
+    resolve_task(&merged)
+}
+
+/// Reads `[[curriculum]]` (the stages' tasks over `task_table`, the
+/// `[task]` section); `source` names the file in errors.
+fn curriculum_from_doc(
+    doc: &toml::Table,
+    task_table: &toml::Table,
+    source: &str,
+    registry: &Registry,
+) -> Result<Vec<Stage>> {
     let Some(value) = doc.get("curriculum") else {
         return Ok(Vec::new());
     };
@@ -567,12 +623,25 @@ fn curriculum_from_doc(doc: &toml::Table, source: &str, registry: &Registry) -> 
                 learn::optim::check_learning_rate(rate)
                     .map_err(|e| anyhow!("config {source} [[curriculum]] stage {}: {e}", k + 1))?;
             }
+            let task_overrides = stage.task.unwrap_or_default();
+            let task = if task_overrides.is_empty() {
+                None
+            } else {
+                Some(stage_task(task_table, &task_overrides).map_err(|e| {
+                    anyhow!(
+                        "config {source} [[curriculum]] stage {} [curriculum.task]: {e}",
+                        k + 1
+                    )
+                })?)
+            };
             Ok(Stage {
                 terrain: registry
                     .parse(&stage.terrain)
                     .with_context(|| format!("config {source} [[curriculum]] stage {}", k + 1))?,
                 iterations: stage.iterations,
                 learning_rate: stage.learning_rate,
+                task_overrides,
+                task,
             })
         })
         .collect()
@@ -594,6 +663,7 @@ struct TaskSection {
     distance_reward: Option<String>,
     forward_reward_per_m: Option<f64>,
     target_progress_m: Option<f64>,
+    max_paid_progress_m: Option<f64>,
     balance_terms: Option<String>,
     action_prior: Option<String>,
     observation: Option<ObservationSection>,
@@ -633,6 +703,28 @@ impl TaskSection {
         if !termination_reward.is_finite() {
             return Err("termination_reward must be finite".to_string());
         }
+        let distance_reward = match self.distance_reward {
+            Some(name) => DistanceReward::from_name(&name).ok_or_else(|| {
+                format!(
+                    "distance_reward must be \"progress\" (the paper's), \"new_ground\", \"forward\" or \"tracking\", got {name:?}"
+                )
+            })?,
+            None => d.distance_reward,
+        };
+        let max_paid_progress_m = match self.max_paid_progress_m {
+            Some(v) if !(v.is_finite() && v > 0.0) => {
+                return Err(format!(
+                    "max_paid_progress_m must be a positive number (m per phase), got {v}"
+                ));
+            }
+            Some(_) if distance_reward != DistanceReward::NewGround => {
+                return Err(format!(
+                    "max_paid_progress_m caps distance_reward = \"new_ground\" only, but distance_reward = {:?}",
+                    distance_reward.name()
+                ));
+            }
+            v => v,
+        };
         let observation = self.observation.map_or(o, |s| ObservationConfig {
             foot_history: s.foot_history.unwrap_or(o.foot_history),
             short_history: s.short_history.unwrap_or(o.short_history),
@@ -658,14 +750,7 @@ impl TaskSection {
                 Some(v) => v,
                 None => d.settle_secs,
             },
-            distance_reward: match self.distance_reward {
-                Some(name) => DistanceReward::from_name(&name).ok_or_else(|| {
-                    format!(
-                        "distance_reward must be \"progress\" (the paper's), \"new_ground\", \"forward\" or \"tracking\", got {name:?}"
-                    )
-                })?,
-                None => d.distance_reward,
-            },
+            distance_reward,
             forward_reward_per_m: match self.forward_reward_per_m {
                 Some(v) if !(v.is_finite() && (0.0..=1e4).contains(&v)) => {
                     return Err(format!("forward_reward_per_m must be in [0, 10000], got {v}"));
@@ -678,6 +763,7 @@ impl TaskSection {
                 self.target_progress_m,
                 d.target_progress_m,
             )?,
+            max_paid_progress_m,
             balance_terms: match self.balance_terms {
                 Some(name) => BalanceTerms::from_name(&name).ok_or_else(|| {
                     format!(
@@ -986,6 +1072,79 @@ mod tests {
             Experiment::from_toml_builtin(&plain.to_toml(), "r").unwrap(),
             plain
         );
+    }
+
+    #[test]
+    fn a_stage_sets_task_keys_over_the_task_section() {
+        let text = "[task]\nmax_phases = 12\ntermination_reward = -10.0\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n\n[curriculum.task]\ntermination_reward = -30.0\nmax_paid_progress_m = 0.04\n";
+        let e = Experiment::from_toml_builtin(text, "c.toml").unwrap();
+        // stage 1 runs [task]; stage 2 [task] with its two keys on top
+        assert_eq!(e.task_at(0), &e.task);
+        assert_eq!(e.task.termination_reward, -10.0);
+        assert_eq!(e.task.max_paid_progress_m, None);
+        let late = e.task_at(3);
+        assert_eq!(late.termination_reward, -30.0);
+        assert_eq!(late.max_paid_progress_m, Some(0.04));
+        assert_eq!(late.max_phases, 12, "[task]'s other keys stand");
+        assert_eq!(late.distance_reward, DistanceReward::NewGround);
+        assert_eq!(e.task_at(99), late);
+        // the resolved file keeps the stage's keys as written
+        let resolved = e.to_toml();
+        assert!(
+            resolved.contains(
+                "[curriculum.task]\nmax_paid_progress_m = 0.04\ntermination_reward = -30.0\n"
+            ),
+            "{resolved}"
+        );
+        assert_eq!(
+            Experiment::from_toml_builtin(&resolved, "resolved").unwrap(),
+            e
+        );
+        // a pace cap in [task] round-trips too
+        let capped = Experiment::from_toml_builtin(
+            "[terrain]\nspec = \"rigid\"\n[task]\nmax_paid_progress_m = 0.05\n",
+            "c.toml",
+        )
+        .unwrap();
+        assert_eq!(capped.task.max_paid_progress_m, Some(0.05));
+        assert_eq!(
+            Experiment::from_toml_builtin(&capped.to_toml(), "resolved").unwrap(),
+            capped
+        );
+        for (stage_keys, expected) in [
+            (
+                "[curriculum.task.observation]\nfoot_history = false\n",
+                "stage 2 [curriculum.task]: observation cannot change between stages",
+            ),
+            (
+                "[curriculum.task]\naction_prior = \"scripted_crawl\"\n",
+                "stage 2 [curriculum.task]: action_prior cannot change between stages",
+            ),
+            (
+                "[curriculum.task]\nmax_phase = 3\n",
+                "stage 2 [curriculum.task]: unknown field `max_phase`",
+            ),
+            (
+                "[curriculum.task]\nmax_paid_progress_m = 0.0\n",
+                "max_paid_progress_m must be a positive number (m per phase), got 0",
+            ),
+            (
+                "[curriculum.task]\ndistance_reward = \"tracking\"\nmax_paid_progress_m = 0.04\n",
+                "max_paid_progress_m caps distance_reward = \"new_ground\" only, but distance_reward = \"tracking\"",
+            ),
+        ] {
+            let text = format!(
+                "[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n{stage_keys}"
+            );
+            let err = format!(
+                "{:#}",
+                Experiment::from_toml_builtin(&text, "c.toml").unwrap_err()
+            );
+            assert!(
+                err.contains(expected) && err.contains("c.toml"),
+                "{stage_keys:?} gave {err:?}"
+            );
+        }
     }
 
     #[test]

@@ -60,7 +60,11 @@ impl Policy {
         let config =
             crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE), registry)
                 .with_context(|| format!("policy {arg}"))?;
-        let (task, physics) = (config.task, config.physics);
+        // the task of the stage the policy's last iteration trained in
+        let task = config
+            .task_at(learner.iteration().saturating_sub(1))
+            .clone();
+        let physics = config.physics;
         if learner.obs_size() != task.observation_size()
             || learner.action_size() != robot::action::ACTION_SIZE
         {

@@ -97,16 +97,13 @@ impl TaskEnv {
     pub fn new(
         registry: &Arc<Registry>,
         terrain: &TerrainSpec,
+        task: &TaskConfig,
         model: &Arc<RobotModel>,
         experiment: &Experiment,
         threads: usize,
         interrupted: Arc<AtomicBool>,
     ) -> Result<Self> {
-        let (task, envs, seed) = (
-            &experiment.task,
-            experiment.train.envs,
-            experiment.train.seed,
-        );
+        let (envs, seed) = (experiment.train.envs, experiment.train.seed);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()

@@ -315,10 +315,12 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
     }
 
     let model = args.scene.robot()?;
-    let build_env = |terrain| {
+    // the worlds of 0-based iteration `iteration`: its stage's terrain and task
+    let build_env = |iteration| {
         TaskEnv::new(
             registry,
-            terrain,
+            experiment.terrain_at(iteration).1,
+            experiment.task_at(iteration),
             &model,
             &experiment,
             threads,
@@ -326,7 +328,7 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
         )
     };
     let mut stage = experiment.terrain_at(start_iteration).0;
-    let mut env = build_env(experiment.terrain_at(start_iteration).1)?;
+    let mut env = build_env(start_iteration)?;
     let sink = args.rerun.sink(RerunSink::Spawn);
     for (k, &e) in experiment.train.rerun_envs.iter().enumerate() {
         let logger = args.rerun.open_sink(
@@ -355,18 +357,23 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
         let stage_rate = experiment.learning_rate_at(iteration);
         if next_stage != stage {
             let loggers = env.detach_loggers();
-            env = build_env(terrain)?;
+            env = build_env(iteration)?;
             for l in loggers {
                 env.attach_logger(l.env, l.logger);
             }
             stage = next_stage;
-            match stage_rate {
-                Some(rate) => eprintln!(
-                    "curriculum stage {}: {terrain}, learning rate {rate:e}",
-                    stage + 1
-                ),
-                None => eprintln!("curriculum stage {}: {terrain}", stage + 1),
-            }
+            let rate = stage_rate.map_or(String::new(), |r| format!(", learning rate {r:e}"));
+            let overrides = &experiment.curriculum[stage].task_overrides;
+            let task = if overrides.is_empty() {
+                String::new()
+            } else {
+                let keys: Vec<String> = overrides
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {v}"))
+                    .collect();
+                format!(", task: {}", keys.join(", "))
+            };
+            eprintln!("curriculum stage {}: {terrain}{rate}{task}", stage + 1);
         }
         // a stage's own learning rate (set every iteration, so a resume
         // inside a stage runs as the uninterrupted run did)

@@ -262,6 +262,68 @@ fn a_curriculum_stage_sets_its_learning_rate_and_resumes_exactly() {
     assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
 }
 
+#[test]
+fn a_curriculum_stage_sets_task_keys_and_resumes_exactly() {
+    let dir = scratch_dir("stage-task");
+    // stage 2 cuts episodes to 1 phase and charges a fall 50
+    let text = TINY.replace(
+        "[train]",
+        "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[curriculum.task]\nmax_phases = 1\ntermination_reward = -50.0\n\n[train]",
+    );
+    let config = dir.join("staged.toml");
+    std::fs::write(&config, text).unwrap();
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let train = |run: &Path| {
+        ok(&[
+            "train",
+            "--config",
+            s(&config),
+            "--run-dir",
+            s(run),
+            "--threads",
+            "2",
+            "--rerun",
+            "off",
+        ])
+    };
+    let log = train(&a);
+    assert!(
+        log.contains("curriculum stage 2: rigid, task: max_phases = 1, termination_reward = -50.0"),
+        "{log}"
+    );
+    let lengths: Vec<f64> = metrics_without_timing(&a)
+        .iter()
+        .map(|m| m["mean_episode_length"].as_f64().unwrap())
+        .collect();
+    assert!(
+        lengths[..2].iter().all(|&l| l > 1.0),
+        "stage 1 runs [task]'s 4-phase episodes: {lengths:?}"
+    );
+    assert_eq!(lengths[2..], [1.0, 1.0], "stage 2's episodes last 1 phase");
+
+    // b: stopped after stage 1 and resumed from its checkpoint, whose
+    // config carries the stage's task keys
+    train(&b);
+    std::fs::remove_dir_all(b.join("checkpoints/iter-000003")).unwrap();
+    std::fs::remove_dir_all(b.join("checkpoints/iter-000004")).unwrap();
+    let saved = std::fs::read_to_string(b.join("checkpoints/iter-000002/config.toml")).unwrap();
+    assert!(
+        saved.contains("[curriculum.task]\nmax_phases = 1\ntermination_reward = -50.0\n"),
+        "{saved}"
+    );
+    ok(&[
+        "train",
+        "--resume",
+        s(&b.join("checkpoints/iter-000002")),
+        "--threads",
+        "2",
+        "--rerun",
+        "off",
+    ]);
+    assert_eq!(weights(&a), weights(&b), "the resumed stage 2 differs");
+    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+}
+
 /// [`TINY`] learned by SAC: learning starts after 8 transitions.
 const TINY_SAC: &str = "\n[algo]\nname = \"sac\"\n\n[sac]\nhidden_sizes = [16]\nbatch_size = 8\nlearning_starts = 8\nsteps_per_env = 4\nbuffer_size = 1000\n";
 

@@ -11,7 +11,8 @@ pub enum DistanceReward {
     #[default]
     Progress,
     /// 10 x progress past the closest approach to the current goal so far in
-    /// the episode, minus 1 x the phase's move away from it.
+    /// the episode (at most `max_paid_progress_m` of it per phase), minus 1 x
+    /// the phase's move away from it.
     NewGround,
     /// `forward_reward_per_m` x progress toward the goal, the same weight
     /// both ways.
@@ -142,6 +143,10 @@ pub struct TaskConfig {
     pub forward_reward_per_m: f64,
     /// the progress per phase [`DistanceReward::Tracking`] pays most for, m
     pub target_progress_m: f64,
+    /// [`DistanceReward::NewGround`] pays at most this much new ground per
+    /// phase (`None`: all of it), m: a pace cap, so that speed past it
+    /// earns nothing and only risks a fall
+    pub max_paid_progress_m: Option<f64>,
     /// how the balance terms pay
     pub balance_terms: BalanceTerms,
     /// what the policy's action is added to
@@ -171,6 +176,7 @@ impl Default for TaskConfig {
             distance_reward: DistanceReward::default(),
             forward_reward_per_m: 40.0,
             target_progress_m: 0.025,
+            max_paid_progress_m: None,
             balance_terms: BalanceTerms::default(),
             action_prior: ActionPrior::default(),
         }

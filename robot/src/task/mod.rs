@@ -44,7 +44,10 @@
 //!   before in the episode (progress past the closest approach to the
 //!   current goal) and charges 1x for every step away, so rocking does not
 //!   pay; for a robot that only ever moves toward the goal it equals the
-//!   paper's term, which stays the default. `distance_reward = "forward"`
+//!   paper's term, which stays the default. `max_paid_progress_m` caps the
+//!   new ground paid in one phase (R_d = 10 min(new ground, cap) - 1 x
+//!   the move back): a pace cap, so that walking faster than it earns
+//!   nothing and only risks the termination's cost. `distance_reward = "forward"`
 //!   ([`DistanceReward::Forward`]) pays `forward_reward_per_m` (default 40)
 //!   per metre of progress and charges the same per metre back: at 40 a
 //!   gait of 2 cm per phase (8 m in 400 phases) earns 0.8 per phase, what
@@ -443,6 +446,7 @@ impl Task {
                         self.episode.closest_goal_distance_m,
                         goal_distance_prev,
                         rho.norm(),
+                        self.config.max_paid_progress_m.unwrap_or(f64::INFINITY),
                     ),
                     DistanceReward::Forward => RewardTerms::forward_term(
                         goal_distance_prev,

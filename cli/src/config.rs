@@ -1267,28 +1267,44 @@ mod tests {
         assert_eq!(rigid.task, default_task());
         assert_eq!(rigid.ppo, default_ppo());
         // the 5 cm curriculum starts as the rigid recipe, deepens the tiles,
-        // then steps the learning rate down on 5 cm tiles
+        // then steps the learning rate down on 5 cm tiles and caps the
+        // pace paid for in its last two stages
         let deepening = get("elastic-5cm-curriculum");
         assert_eq!((&deepening.task, &deepening.ppo), (&rigid.task, &rigid.ppo));
-        let stages: Vec<(String, Option<f64>)> = deepening
+        let stages: Vec<(String, u64, Option<f64>, Option<f64>)> = deepening
             .curriculum
             .iter()
-            .map(|s| (s.terrain.to_string(), s.learning_rate))
+            .map(|s| {
+                let task = s.task.as_ref().unwrap_or(&deepening.task);
+                (
+                    s.terrain.to_string(),
+                    s.iterations,
+                    s.learning_rate,
+                    task.max_paid_progress_m,
+                )
+            })
             .collect();
         let expected = [
-            ("rigid", None),
-            ("elastic:2cm", None),
-            ("elastic:3cm", None),
-            ("elastic:4cm", None),
-            ("elastic:5cm", None),
-            ("elastic:5cm", Some(1e-4)),
-            ("elastic:5cm", Some(5e-5)),
-            ("elastic:5cm", Some(2e-5)),
+            ("rigid", 260, None, None),
+            ("elastic:2cm", 60, None, None),
+            ("elastic:3cm", 60, None, None),
+            ("elastic:4cm", 60, None, None),
+            ("elastic:5cm", 260, None, None),
+            ("elastic:5cm", 60, Some(1e-4), None),
+            ("elastic:5cm", 40, Some(5e-5), None),
+            ("elastic:5cm", 20, Some(5e-5), Some(0.04)),
+            ("elastic:5cm", 20, Some(2e-5), Some(0.04)),
         ];
         assert_eq!(
             stages,
-            expected.map(|(t, r)| (t.to_string(), r)),
+            expected.map(|(t, n, r, c)| (t.to_string(), n, r, c)),
             "{stages:?}"
+        );
+        let capped = deepening.task_at(deepening.total_iterations() - 1);
+        assert_eq!(
+            (capped.termination_reward, capped.distance_reward),
+            (rigid.task.termination_reward, rigid.task.distance_reward),
+            "the cap is the stages' only task change"
         );
         assert_eq!(deepening.curriculum[0].iterations, rigid.train.iterations);
         assert_eq!(deepening.learning_rate_at(0), Some(rigid.ppo.learning_rate));

@@ -205,93 +205,111 @@ fn same_seed_same_training_and_resume_continues_bit_for_bit() {
     );
 }
 
+/// [`TINY`] as two rigid stages of 2 iterations, the second with
+/// `stage_2` (its keys and tables) added, trained on 2 threads as run `a`
+/// and as run `b`, which is stopped after stage 1 and resumed.
+struct TwoStages {
+    config: PathBuf,
+    a: PathBuf,
+    b: PathBuf,
+}
+
+impl TwoStages {
+    fn new(name: &str, stage_2: &str) -> Self {
+        let dir = scratch_dir(name);
+        let text = TINY.replace(
+            "[train]",
+            &format!(
+                "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n{stage_2}\n[train]"
+            ),
+        );
+        let config = dir.join("staged.toml");
+        std::fs::write(&config, text).unwrap();
+        Self {
+            config,
+            a: dir.join("a"),
+            b: dir.join("b"),
+        }
+    }
+
+    /// Trains `run` through both stages; the log.
+    fn train(&self, run: &Path) -> String {
+        ok(&[
+            "train",
+            "--config",
+            s(&self.config),
+            "--run-dir",
+            s(run),
+            "--threads",
+            "2",
+            "--rerun",
+            "off",
+        ])
+    }
+
+    /// Run `b`: trained, cut back to its checkpoint of iteration 2 (the end
+    /// of stage 1), which `check` reads, then resumed from it; asserts that
+    /// it ends as run `a` (trained before) did.
+    fn resume_after_stage_1(&self, check: impl FnOnce(&Path)) {
+        let b = &self.b;
+        self.train(b);
+        std::fs::remove_dir_all(b.join("checkpoints/iter-000003")).unwrap();
+        std::fs::remove_dir_all(b.join("checkpoints/iter-000004")).unwrap();
+        let checkpoint = b.join("checkpoints/iter-000002");
+        check(&checkpoint);
+        ok(&[
+            "train",
+            "--resume",
+            s(&checkpoint),
+            "--threads",
+            "2",
+            "--rerun",
+            "off",
+        ]);
+        assert_eq!(weights(&self.a), weights(b), "the resumed stage 2 differs");
+        assert_eq!(metrics_without_timing(&self.a), metrics_without_timing(b));
+    }
+}
+
 /// A curriculum stage's learning rate: the stage runs at it, the stage
 /// without one at `[ppo]`'s, and a resume at the stage boundary (whose
 /// checkpoint holds the first stage's rate) continues bit for bit.
 #[test]
 fn a_curriculum_stage_sets_its_learning_rate_and_resumes_exactly() {
-    let dir = scratch_dir("stage-rate");
-    let text = TINY.replace(
-        "[train]",
-        "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\nlearning_rate = 5e-5\n\n[train]",
-    );
-    let config = dir.join("staged.toml");
-    std::fs::write(&config, text).unwrap();
-    let (a, b) = (dir.join("a"), dir.join("b"));
-    let train = |run: &Path| {
-        ok(&[
-            "train",
-            "--config",
-            s(&config),
-            "--run-dir",
-            s(run),
-            "--threads",
-            "2",
-            "--rerun",
-            "off",
-        ])
-    };
-    let log = train(&a);
+    let runs = TwoStages::new("stage-rate", "learning_rate = 5e-5\n");
+    let log = runs.train(&runs.a);
     assert!(
         log.contains("curriculum stage 2: rigid, learning rate 5e-5"),
         "{log}"
     );
-    let rates: Vec<f64> = metrics_without_timing(&a)
+    let rates: Vec<f64> = metrics_without_timing(&runs.a)
         .iter()
         .map(|m| m["learning_rate"].as_f64().unwrap())
         .collect();
     assert_eq!(rates, [2e-4, 2e-4, 5e-5, 5e-5]);
 
-    // b: the same run, stopped after stage 1 (copied from a's checkpoint of
-    // iteration 2) and resumed
-    train(&b);
-    std::fs::remove_dir_all(b.join("checkpoints/iter-000003")).unwrap();
-    std::fs::remove_dir_all(b.join("checkpoints/iter-000004")).unwrap();
-    let state = std::fs::read_to_string(b.join("checkpoints/iter-000002/state.toml")).unwrap();
-    assert!(state.contains("learning_rate = 0.0002"), "{state}");
-    ok(&[
-        "train",
-        "--resume",
-        s(&b.join("checkpoints/iter-000002")),
-        "--threads",
-        "2",
-        "--rerun",
-        "off",
-    ]);
-    assert_eq!(weights(&a), weights(&b), "the resumed stage 2 differs");
-    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+    runs.resume_after_stage_1(|checkpoint| {
+        let state = std::fs::read_to_string(checkpoint.join("state.toml")).unwrap();
+        assert!(state.contains("learning_rate = 0.0002"), "{state}");
+    });
 }
 
+/// A curriculum stage's task keys: the stage's worlds run them, the
+/// checkpoint's config keeps them, and a resume at the stage boundary
+/// continues bit for bit.
 #[test]
 fn a_curriculum_stage_sets_task_keys_and_resumes_exactly() {
-    let dir = scratch_dir("stage-task");
     // stage 2 cuts episodes to 1 phase and charges a fall 50
-    let text = TINY.replace(
-        "[train]",
-        "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[curriculum.task]\nmax_phases = 1\ntermination_reward = -50.0\n\n[train]",
+    let runs = TwoStages::new(
+        "stage-task",
+        "\n[curriculum.task]\nmax_phases = 1\ntermination_reward = -50.0\n",
     );
-    let config = dir.join("staged.toml");
-    std::fs::write(&config, text).unwrap();
-    let (a, b) = (dir.join("a"), dir.join("b"));
-    let train = |run: &Path| {
-        ok(&[
-            "train",
-            "--config",
-            s(&config),
-            "--run-dir",
-            s(run),
-            "--threads",
-            "2",
-            "--rerun",
-            "off",
-        ])
-    };
-    let log = train(&a);
+    let log = runs.train(&runs.a);
     assert!(
         log.contains("curriculum stage 2: rigid, task: max_phases = 1, termination_reward = -50.0"),
         "{log}"
     );
-    let lengths: Vec<f64> = metrics_without_timing(&a)
+    let lengths: Vec<f64> = metrics_without_timing(&runs.a)
         .iter()
         .map(|m| m["mean_episode_length"].as_f64().unwrap())
         .collect();
@@ -301,27 +319,13 @@ fn a_curriculum_stage_sets_task_keys_and_resumes_exactly() {
     );
     assert_eq!(lengths[2..], [1.0, 1.0], "stage 2's episodes last 1 phase");
 
-    // b: stopped after stage 1 and resumed from its checkpoint, whose
-    // config carries the stage's task keys
-    train(&b);
-    std::fs::remove_dir_all(b.join("checkpoints/iter-000003")).unwrap();
-    std::fs::remove_dir_all(b.join("checkpoints/iter-000004")).unwrap();
-    let saved = std::fs::read_to_string(b.join("checkpoints/iter-000002/config.toml")).unwrap();
-    assert!(
-        saved.contains("[curriculum.task]\nmax_phases = 1\ntermination_reward = -50.0\n"),
-        "{saved}"
-    );
-    ok(&[
-        "train",
-        "--resume",
-        s(&b.join("checkpoints/iter-000002")),
-        "--threads",
-        "2",
-        "--rerun",
-        "off",
-    ]);
-    assert_eq!(weights(&a), weights(&b), "the resumed stage 2 differs");
-    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+    runs.resume_after_stage_1(|checkpoint| {
+        let saved = std::fs::read_to_string(checkpoint.join("config.toml")).unwrap();
+        assert!(
+            saved.contains("[curriculum.task]\nmax_phases = 1\ntermination_reward = -50.0\n"),
+            "{saved}"
+        );
+    });
 }
 
 /// [`TINY`] learned by SAC: learning starts after 8 transitions.

@@ -1364,7 +1364,11 @@ mod tests {
             ("[[curriculum]]\nterrain = \"rigid\"\n", "iterations"),
             (
                 "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\nlearning_rate = 0.0\n",
-                "stage 1: learning_rate = 0: must be finite and > 0",
+                "stage 1: learning_rate = 0: must be in (0, 1)",
+            ),
+            (
+                "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\nlearning_rate = 1.5\n",
+                "stage 1: learning_rate = 1.5: must be in (0, 1)",
             ),
             (
                 "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\nlearning_rate = 1e-4\n[ppo]\ndesired_kl = 0.01\n",

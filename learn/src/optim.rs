@@ -46,13 +46,14 @@ pub fn clip_grad_norm(grads: &mut [Tensor], max_norm: f64) -> Result<f64, LearnE
     Ok(norm)
 }
 
-/// A learning rate must be finite and positive.
+/// A learning rate must lie in (0, 1), the range `[ppo]` and `[sac]`
+/// accept for theirs.
 pub fn check_learning_rate(learning_rate: f64) -> Result<(), LearnError> {
-    if learning_rate.is_finite() && learning_rate > 0.0 {
+    if learning_rate > 0.0 && learning_rate < 1.0 {
         Ok(())
     } else {
         Err(LearnError::Config(format!(
-            "learning_rate = {learning_rate}: must be finite and > 0"
+            "learning_rate = {learning_rate}: must be in (0, 1)"
         )))
     }
 }

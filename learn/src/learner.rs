@@ -285,7 +285,7 @@ mod tests {
             .unwrap(),
         ));
         for (k, mut learner) in [ppo, sac].into_iter().enumerate() {
-            for bad in [0.0, -1e-4, f64::NAN, f64::INFINITY] {
+            for bad in [0.0, -1e-4, 1.0, f64::NAN, f64::INFINITY] {
                 let err = learner.set_learning_rate(bad).unwrap_err().to_string();
                 assert!(err.contains("learning_rate"), "{err}");
             }

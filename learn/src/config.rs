@@ -114,8 +114,7 @@ impl PpoConfig {
             );
         }
         let in_open_unit = |v: f64| v.is_finite() && v > 0.0 && v <= 1.0;
-        if !(self.learning_rate.is_finite() && self.learning_rate > 0.0 && self.learning_rate < 1.0)
-        {
+        if !crate::optim::is_learning_rate(self.learning_rate) {
             return bad("learning_rate", "in (0, 1)", self.learning_rate.to_string());
         }
         if !in_open_unit(self.gamma) {

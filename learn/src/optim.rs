@@ -46,10 +46,15 @@ pub fn clip_grad_norm(grads: &mut [Tensor], max_norm: f64) -> Result<f64, LearnE
     Ok(norm)
 }
 
-/// A learning rate must lie in (0, 1), the range `[ppo]` and `[sac]`
-/// accept for theirs.
+/// Whether `learning_rate` lies in (0, 1): the one range `[ppo]`, `[sac]`
+/// and a curriculum stage accept.
+pub fn is_learning_rate(learning_rate: f64) -> bool {
+    learning_rate > 0.0 && learning_rate < 1.0
+}
+
+/// A learning rate must lie in (0, 1) ([`is_learning_rate`]).
 pub fn check_learning_rate(learning_rate: f64) -> Result<(), LearnError> {
-    if learning_rate > 0.0 && learning_rate < 1.0 {
+    if is_learning_rate(learning_rate) {
         Ok(())
     } else {
         Err(LearnError::Config(format!(

@@ -165,7 +165,7 @@ impl SacConfig {
                 self.batch_renorm_momentum.to_string(),
             );
         }
-        if !(positive(self.learning_rate) && self.learning_rate < 1.0) {
+        if !crate::optim::is_learning_rate(self.learning_rate) {
             return bad("learning_rate", "in (0, 1)", self.learning_rate.to_string());
         }
         if !(positive(self.gamma) && self.gamma <= 1.0) {

@@ -16,7 +16,7 @@ use crate::commands::{load_robot, make_world, parse_spec, positive_seconds};
 use terrain_plugins::Registry;
 
 /// The default scenes: rigid ground, the paper's elastic scene (15 x 5 tiles
-/// around the robot) and the default 20 m long elastic terrain.
+/// around the robot) and the default 40 m long elastic terrain.
 pub const DEFAULT_TERRAINS: [&str; 3] = [
     "rigid",
     "elastic:5cm:length=3m:back=1.5m:width=1m",
@@ -26,7 +26,7 @@ pub const DEFAULT_TERRAINS: [&str; 3] = [
 /// Arguments of `quadwalk bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Terrain spec to measure (repeat for several); default: rigid, elastic:5cm on 15 x 5 tiles, elastic:5cm 20 m long
+    /// Terrain spec to measure (repeat for several); default: rigid, elastic:5cm on 15 x 5 tiles, elastic:5cm 40 m long
     #[arg(long = "terrain")]
     terrains: Vec<String>,
     /// Thread counts to measure, one world per thread (repeat or comma-separate); default: 1 and all cores

@@ -31,8 +31,8 @@ fn extent_decls() -> Vec<ParamDecl> {
         ParamDecl::optional(
             "length",
             ParamKind::Length,
-            ParamValue::Length(20.0),
-            "extent along x from x = 0, default 20m",
+            ParamValue::Length(crate::tiles::DEFAULT_LENGTH_M),
+            "extent along x from x = 0, default 40m",
         ),
         ParamDecl::optional(
             "back",
@@ -587,7 +587,7 @@ impl TerrainPlugin for StepsPlugin {
         ];
         let mut extent = extent_decls();
         extent[0].name = "extent";
-        extent[0].doc = "how far the stairs reach along x from x = 0, default 20m";
+        extent[0].doc = "how far the stairs reach along x from x = 0, default 40m";
         params.extend(extent);
         params
     }

@@ -31,9 +31,9 @@ fn builtin_specs_parse_to_si_values() {
             Surface::rigid()
         ]
     );
-    let named = parse("elastic:3cm:travel=12cm:length=40m").unwrap();
+    let named = parse("elastic:3cm:travel=12cm:length=30m").unwrap();
     assert_eq!(named.length_m("travel"), 0.12);
-    assert_eq!(named.length_m("length"), 40.0);
+    assert_eq!(named.length_m("length"), 30.0);
     assert_eq!(parse("rigid").unwrap().plugin(), "rigid");
 }
 
@@ -351,7 +351,7 @@ fn a_new_fields_tiles_sleep_from_its_second_step_and_still_carry_load() {
     bare.step();
     assert_eq!(
         awake(&bare),
-        1500,
+        3000,
         "rapier woke the tiles: the hook has work"
     );
     let (mut world, mut terrain) = world_with("elastic:5cm", 0);
@@ -410,7 +410,8 @@ fn idle_tiles_sleep_and_rest_at_the_surface() {
         .filter(|(_, b)| b.is_dynamic() && !b.is_sleeping())
         .count();
     assert_eq!(awake, 0, "untouched tiles must stay asleep");
-    assert_eq!(terrain.tile_count(), 100 * 15);
+    // the default 40 m field: 200 columns of 15 tiles
+    assert_eq!(terrain.tile_count(), 200 * 15);
     for (x, y) in [(0.0, 0.0), (5.1, 0.4), (-1.0, 1.2)] {
         assert!(terrain.surface_height_m(&world, x, y).abs() < 1e-6);
     }
@@ -438,12 +439,12 @@ fn varying_regions_follow_the_seed_and_start_with_the_first_surface() {
     // Rigid regions have no tiles and a surface at z = 0.
     let mut tiles = Vec::new();
     terrain.tiles_in(&world, terrain.extent(), &mut tiles);
-    assert_eq!(tiles.len(), 100 * 15);
+    assert_eq!(tiles.len(), 200 * 15);
     let rigid_cells = tiles
         .iter()
         .filter(|t| regions[t.region].stiffness_n_per_m.is_none())
         .count();
-    assert_eq!(terrain.tile_count(), 100 * 15 - rigid_cells);
+    assert_eq!(terrain.tile_count(), 200 * 15 - rigid_cells);
 }
 
 /// Presses the tile centred on the origin with `load_n` for `steps`, each
@@ -542,7 +543,7 @@ fn a_soil_tile_with_recovery_rises_back_with_its_time_constant() {
 fn per_tile_depths_cover_their_range_reproducibly_and_each_tile_sinks_its_own() {
     use crate::tiles::{RegionLayout, TileParams, TiledTerrain};
     let field = |seed: u64| {
-        let spec = parse("elastic:2..5cm").unwrap();
+        let spec = parse("elastic:2..5cm:length=20m").unwrap();
         let ctx = BuildContext {
             seed,
             ..BuildContext::default()

@@ -45,6 +45,12 @@ pub const TILE_THICKNESS_M: f64 = 0.05;
 /// `CoefficientCombineRule::Min`), so a terrain's `friction=<mu>` is the
 /// contact's coefficient.
 pub const GROUND_FRICTION: f32 = 1.0;
+/// Default extent of a field along x (its `length`), metres: room for 400
+/// phases (`quadwalk eval`'s default episode) of a 5 cm-per-phase gait from
+/// the start (the tiles end at x = 38 m). A 20 m field, the default until
+/// 2026-12-01, ended at x = 18 m under a walking policy's 365th phase; past the
+/// tiles the ground is the fixed base, 20 cm down, and the robot falls there.
+pub const DEFAULT_LENGTH_M: f64 = 40.0;
 
 /// Seed offset between the height draws of rough regions.
 const ROUGH_REGION_STRIDE: u64 = 0x9e37_79b9_7f4a_7c15;
@@ -101,8 +107,8 @@ pub fn tile_param_decls() -> Vec<ParamDecl> {
         ParamDecl::optional(
             "length",
             Length,
-            V::Length(20.0),
-            "extent along x (walking direction), default 20m",
+            V::Length(DEFAULT_LENGTH_M),
+            "extent along x (walking direction), default 40m",
         ),
         ParamDecl::optional(
             "back",
@@ -705,7 +711,7 @@ impl Terrain for TiledTerrain {
     /// sleep at the next step. The tiles are inserted asleep, but rapier's first
     /// step (which builds its islands) wakes every body, and an awake body
     /// sleeps only after 0.5 s of rest: without this, each new world solved
-    /// all its tile joints (1,500 on the default 20 m field) for its first
+    /// all its tile joints (3,000 on the default 40 m field) for its first
     /// 120 steps, the whole settle of an episode. A tile the robot already
     /// touches is moving and stays awake; a sleeping tile wakes on contact,
     /// as in every later step.

@@ -155,7 +155,7 @@ fn terrain_list_and_show_describe_the_plugins() {
     // k = m g / (4 d) with the Laikago's 25.567 kg.
     let k = shown["regions"][0]["stiffness_n_per_m"].as_f64().unwrap();
     assert!((k - 25.567 * 9.81 / 0.2).abs() < 0.01, "{shown}");
-    assert_eq!(shown["tile_count"], 1500);
+    assert_eq!(shown["tile_count"], 3000);
     let text = String::from_utf8_lossy(
         &quadwalk(&["terrain", "show", "varying:2m:2,3,4,5cm,rigid"]).stdout,
     )

@@ -107,7 +107,7 @@ pub fn near_terrain_end(task: &Task) -> bool {
 /// `phases` phases.
 pub fn terrain_end_advice(phases: impl std::fmt::Display) -> String {
     format!(
-        "the field is too short for {phases} phases; give it a longer one (e.g. length=40m on a tile terrain)"
+        "the field is too short for {phases} phases; give it a longer one (e.g. length=80m on a tile terrain)"
     )
 }
 

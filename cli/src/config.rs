@@ -1249,7 +1249,8 @@ mod tests {
         );
         // the paper's configs keep the paper's reward and minibatch exactly
         for (name, e) in &seen {
-            if name.starts_with('t') || name.starts_with("ablation") {
+            if ["tv2", "tv8", "tc2", "tc5"].contains(&name.as_str()) || name.starts_with("ablation")
+            {
                 assert_eq!(e.task.distance_reward, DistanceReward::Progress, "{name}");
                 assert_eq!(e.task.balance_terms, BalanceTerms::Paper, "{name}");
                 assert_eq!(
@@ -1271,19 +1272,21 @@ mod tests {
         // the pace paid for
         let deepening = get("elastic-5cm-curriculum");
         assert_eq!((&deepening.task, &deepening.ppo), (&rigid.task, &rigid.ppo));
-        let stages: Vec<(String, u64, Option<f64>, Option<f64>)> = deepening
-            .curriculum
-            .iter()
-            .map(|s| {
-                let task = s.task.as_ref().unwrap_or(&deepening.task);
-                (
-                    s.terrain.to_string(),
-                    s.iterations,
-                    s.learning_rate,
-                    task.max_paid_progress_m,
-                )
-            })
-            .collect();
+        let stages_of = |e: &Experiment| -> Vec<(String, u64, Option<f64>, Option<f64>)> {
+            e.curriculum
+                .iter()
+                .map(|s| {
+                    let task = s.task.as_ref().unwrap_or(&e.task);
+                    (
+                        s.terrain.to_string(),
+                        s.iterations,
+                        s.learning_rate,
+                        task.max_paid_progress_m,
+                    )
+                })
+                .collect()
+        };
+        let stages = stages_of(deepening);
         let expected = [
             ("rigid", 260, None, None),
             ("elastic:2cm", 60, None, None),
@@ -1307,6 +1310,22 @@ mod tests {
         );
         assert_eq!(deepening.curriculum[0].iterations, rigid.train.iterations);
         assert_eq!(deepening.learning_rate_at(0), Some(rigid.ppo.learning_rate));
+        // policies/tv2's recipe: the same stages, ending on T_v2
+        let tv2 = get("tv2-curriculum");
+        assert_eq!((&tv2.task, &tv2.ppo), (&rigid.task, &rigid.ppo));
+        assert_eq!(tv2.terrain.to_string(), "varying:2m:2cm,3cm,4cm,5cm,rigid");
+        let on_tv2: Vec<_> = stages
+            .iter()
+            .map(|(t, n, r, c)| {
+                let t = if t == "elastic:5cm" {
+                    tv2.terrain.to_string()
+                } else {
+                    t.clone()
+                };
+                (t, *n, *r, *c)
+            })
+            .collect();
+        assert_eq!(stages_of(tv2), on_tv2);
     }
 
     #[test]

@@ -11,6 +11,7 @@
 //! | `metrics.jsonl` | one JSON object per iteration (the statistics of `learn::IterationStats` or `learn::sac::SacStats`) |
 //! | `checkpoints/iter-NNNNNN/` | `weights.safetensors`, `state.toml`, `config.toml` (SAC: and `replay.safetensors`) |
 //! | `latest` | link to the newest checkpoint |
+//! | `fork.toml` | a run started with `--fork`: the checkpoint it went on from, and its iteration |
 
 use std::fs;
 use std::io::Write as _;
@@ -64,6 +65,14 @@ pub struct TrainArgs {
     /// Continue a run: its directory, or one of its checkpoints
     #[arg(long, value_name = "DIR")]
     resume: Option<PathBuf>,
+    /// Start a new run from another run's checkpoint (or run directory): the
+    /// config (--config/--terrain) must train the checkpoint's iterations
+    /// exactly as that run did (same learner, settings, seed, worlds and,
+    /// iteration by iteration, terrain, task and learning rate) and may
+    /// differ after them, so the new run is what a run from scratch on the
+    /// config gives, without repeating the shared part
+    #[arg(long, value_name = "CHECKPOINT", conflicts_with = "resume")]
+    fork: Option<PathBuf>,
     /// Threads stepping the worlds [default: all cores]
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     threads: Option<u64>,
@@ -92,6 +101,8 @@ struct Plan {
     run_dir: PathBuf,
     trainer: Learner,
     threads: usize,
+    /// `--fork`: the checkpoint the run starts from
+    fork: Option<PathBuf>,
 }
 
 /// `runs/<terrain>-seed<seed>-<UTC date>-<time>`: a new directory per run.
@@ -183,6 +194,7 @@ fn plan(registry: &Registry, args: &TrainArgs) -> Result<Plan> {
             run_dir,
             trainer,
             threads,
+            fork: None,
         });
     }
     let mut experiment = args.scene.experiment(registry)?;
@@ -225,6 +237,16 @@ fn plan(registry: &Registry, args: &TrainArgs) -> Result<Plan> {
         robot::action::ACTION_SIZE,
         experiment.train.seed,
     );
+    if let Some(fork) = &args.fork {
+        let (trainer, checkpoint) = fork_from(fork, &experiment, registry)?;
+        return Ok(Plan {
+            experiment,
+            run_dir,
+            trainer,
+            threads,
+            fork: Some(checkpoint),
+        });
+    }
     let trainer = match experiment.algo {
         Algo::Ppo => Learner::Ppo(Box::new(Trainer::new(
             experiment.ppo.clone(),
@@ -244,7 +266,76 @@ fn plan(registry: &Registry, args: &TrainArgs) -> Result<Plan> {
         run_dir,
         trainer,
         threads,
+        fork: None,
     })
+}
+
+/// `--fork CHECKPOINT`: the learner of the checkpoint (a run directory means
+/// its latest) and the checkpoint's path, once `experiment` is shown to
+/// train the checkpoint's iterations as its run did.
+fn fork_from(
+    fork: &Path,
+    experiment: &Experiment,
+    registry: &Registry,
+) -> Result<(Learner, PathBuf)> {
+    let context = || format!("--fork {}", fork.display());
+    let checkpoint = resolve_checkpoint(fork).with_context(context)?;
+    let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
+    let trainer = Learner::load(&checkpoint).with_context(context)?;
+    let forked =
+        Experiment::from_file(&checkpoint.join(CONFIG_FILE), registry).with_context(context)?;
+    let done = trainer.iteration();
+    if let Some(difference) = experiment.differs_before(&forked, done) {
+        bail!(
+            "--fork {}: the checkpoint's run trained its {done} iterations otherwise than this config would: {difference} (this config against the checkpoint's); a fork goes on only from a checkpoint that this config reproduces",
+            fork.display()
+        );
+    }
+    if done >= experiment.total_iterations() {
+        bail!(
+            "--fork {}: the checkpoint is at iteration {done}, and this config trains {} in all; nothing is left to train",
+            fork.display(),
+            experiment.total_iterations()
+        );
+    }
+    Ok((trainer, checkpoint))
+}
+
+/// A forked run's start: the forked run's metrics lines up to the
+/// checkpoint (when it lies in a run directory), `fork.toml`, and the
+/// checkpoint itself, written as this run's own (so that `--resume` works
+/// from the start).
+fn start_fork(
+    run_dir: &Path,
+    checkpoint: &Path,
+    trainer: &Learner,
+    config_text: &str,
+    keep: usize,
+) -> Result<()> {
+    let iteration = trainer.iteration();
+    let source_metrics = checkpoint
+        .parent()
+        .filter(|p| p.file_name().is_some_and(|n| n == "checkpoints"))
+        .and_then(Path::parent)
+        .map(|run| run.join(METRICS_FILE));
+    if let Some(source) = source_metrics.filter(|p| p.exists()) {
+        let text = fs::read_to_string(&source)
+            .with_context(|| format!("cannot read {}", source.display()))?;
+        write_file_atomically(&run_dir.join(METRICS_FILE), text.as_bytes())?;
+        keep_metrics_up_to(&run_dir.join(METRICS_FILE), iteration)?;
+    }
+    let fork = format!(
+        "# this run went on from another run's checkpoint; its first {iteration} iterations are that run's\ncheckpoint = {:?}\niteration = {iteration}\n",
+        checkpoint.display().to_string()
+    );
+    write_file_atomically(&run_dir.join("fork.toml"), fork.as_bytes())?;
+    save_checkpoint(
+        run_dir,
+        iteration,
+        trainer.checkpoint_files()?,
+        config_text,
+        keep,
+    )
 }
 
 /// Flags that may change on a resume as on a fresh run.
@@ -283,6 +374,7 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
         run_dir,
         mut trainer,
         threads,
+        fork,
     } = plan(registry, args)?;
     let total = experiment.total_iterations();
     let start_iteration = trainer.iteration();
@@ -298,6 +390,19 @@ pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<()> {
     remove_partial_saves(&run_dir.join("checkpoints"));
     let config_text = experiment.to_toml();
     write_file_atomically(&run_dir.join(CONFIG_FILE), config_text.as_bytes())?;
+    if let Some(checkpoint) = &fork {
+        start_fork(
+            &run_dir,
+            checkpoint,
+            &trainer,
+            &config_text,
+            experiment.train.keep_checkpoints,
+        )?;
+        eprintln!(
+            "forked from {} at iteration {start_iteration} (this config trains those iterations as that run did)",
+            checkpoint.display()
+        );
+    }
     let metrics_path = run_dir.join(METRICS_FILE);
     keep_metrics_up_to(&metrics_path, start_iteration)?;
 

@@ -328,6 +328,114 @@ fn a_curriculum_stage_sets_task_keys_and_resumes_exactly() {
     });
 }
 
+/// `--fork`: a run that goes on from another run's checkpoint, under a
+/// config that trains the checkpoint's iterations as that run did, ends as
+/// the config's run from scratch does (weights and metrics), and can be
+/// resumed; a checkpoint the config does not reproduce is refused with the
+/// first difference, and no run directory is left behind.
+#[test]
+fn a_fork_ends_as_the_run_from_scratch_and_refuses_a_checkpoint_it_does_not_reproduce() {
+    // run `a` of `source`: stage 2 at a lower learning rate
+    let source = TwoStages::new("fork-source", "learning_rate = 5e-5\n");
+    source.train(&source.a);
+    // the config forked to: stage 2 with 1-phase episodes instead
+    let target = TwoStages::new("fork-target", "\n[curriculum.task]\nmax_phases = 1\n");
+    target.train(&target.a);
+    let fork_args = |checkpoint: &Path, run: &Path| -> Vec<String> {
+        [
+            "train",
+            "--config",
+            s(&target.config),
+            "--fork",
+            s(checkpoint),
+            "--run-dir",
+            s(run),
+            "--threads",
+            "2",
+            "--rerun",
+            "off",
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    fn args(v: &[String]) -> Vec<&str> {
+        v.iter().map(String::as_str).collect()
+    }
+
+    // from the end of stage 1, which both configs train alike
+    let stage_1_end = source.a.join("checkpoints/iter-000002");
+    let forked = &target.b;
+    let log = ok(&args(&fork_args(&stage_1_end, forked)));
+    assert!(
+        log.contains("forked from") && log.contains("at iteration 2"),
+        "{log}"
+    );
+    assert_eq!(
+        weights(&target.a),
+        weights(forked),
+        "the fork differs from the run from scratch"
+    );
+    assert_eq!(
+        metrics_without_timing(&target.a),
+        metrics_without_timing(forked)
+    );
+    let fork_toml = std::fs::read_to_string(forked.join("fork.toml")).unwrap();
+    assert!(
+        fork_toml.contains("iteration = 2") && fork_toml.contains("iter-000002"),
+        "{fork_toml}"
+    );
+    // the fork's own first checkpoint is its starting point, and resumes
+    assert!(
+        forked
+            .join("checkpoints/iter-000002/weights.safetensors")
+            .exists()
+    );
+    for later in ["iter-000003", "iter-000004"] {
+        std::fs::remove_dir_all(forked.join("checkpoints").join(later)).unwrap();
+    }
+    ok(&[
+        "train",
+        "--resume",
+        s(&forked.join("checkpoints/iter-000002")),
+        "--threads",
+        "2",
+        "--rerun",
+        "off",
+    ]);
+    assert_eq!(
+        weights(&target.a),
+        weights(forked),
+        "the resumed fork differs"
+    );
+
+    // from inside the source's stage 2, whose episodes and learning rate
+    // the target's stage 2 does not have (the task is compared first)
+    let refused = target.a.with_file_name("refused");
+    let mut bad = fork_args(&source.a.join("checkpoints/iter-000003"), &refused);
+    let err = failure(&args(&bad), 1);
+    assert!(
+        err.contains("--fork")
+            && err.contains("iteration 3's task: max_phases: 1 against max_phases: 4"),
+        "{err}"
+    );
+    // another seed
+    bad = fork_args(&stage_1_end, &refused);
+    bad.extend(["--seed".to_string(), "7".to_string()]);
+    let err = failure(&args(&bad), 1);
+    assert!(err.contains("train.seed: 7 against 0"), "{err}");
+    assert!(
+        !refused.exists(),
+        "a refused fork left {}",
+        refused.display()
+    );
+    // --fork and --resume exclude each other
+    let err = failure(
+        &["train", "--resume", s(forked), "--fork", s(&stage_1_end)],
+        2,
+    );
+    assert!(err.contains("--fork") && err.contains("--resume"), "{err}");
+}
+
 /// [`TINY`] learned by SAC: learning starts after 8 transitions.
 const TINY_SAC: &str = "\n[algo]\nname = \"sac\"\n\n[sac]\nhidden_sizes = [16]\nbatch_size = 8\nlearning_starts = 8\nsteps_per_env = 4\nbuffer_size = 1000\n";
 

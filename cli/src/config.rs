@@ -1469,6 +1469,14 @@ mod tests {
             Some("iteration 441's terrain: varying:2m:2cm,3cm,4cm,5cm,rigid against elastic:5cm")
         );
         assert_eq!(deepening.differs_before(rigid, 260), None);
+        // T_v2 after 200 iterations of 5 cm tiles: the 5 cm curriculum to 640
+        let after_5cm = get("tv2-after-5cm");
+        assert_eq!(after_5cm.differs_before(deepening, 640), None);
+        assert_eq!(
+            after_5cm.differs_before(deepening, 641).as_deref(),
+            Some("iteration 641's terrain: varying:2m:2cm,3cm,4cm,5cm,rigid against elastic:5cm")
+        );
+        assert_eq!(after_5cm.train.keep_checkpoints, 25);
         assert!(
             deepening
                 .differs_before(rigid, 261)

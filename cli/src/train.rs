@@ -169,13 +169,7 @@ fn plan(registry: &Registry, args: &TrainArgs) -> Result<Plan> {
         let mut experiment = Experiment::from_file(&checkpoint.join(CONFIG_FILE), registry)?;
         let trainer =
             Learner::load(&checkpoint).with_context(|| format!("--resume {}", resume.display()))?;
-        // checkpoints/iter-N -> the run directory two levels up
-        let run_dir = checkpoint
-            .parent()
-            .filter(|p| p.file_name().is_some_and(|n| n == "checkpoints"))
-            .and_then(Path::parent)
-            .map(Path::to_path_buf)
-            .with_context(|| {
+        let run_dir = run_dir_of(&checkpoint).with_context(|| {
                 format!(
                     "--resume {}: the checkpoint is not inside a run directory (RUN/checkpoints/iter-N); \
                      copy it there or train afresh",
@@ -313,16 +307,14 @@ fn start_fork(
     keep: usize,
 ) -> Result<()> {
     let iteration = trainer.iteration();
-    let source_metrics = checkpoint
-        .parent()
-        .filter(|p| p.file_name().is_some_and(|n| n == "checkpoints"))
-        .and_then(Path::parent)
-        .map(|run| run.join(METRICS_FILE));
+    let source_metrics = run_dir_of(checkpoint).map(|run| run.join(METRICS_FILE));
     if let Some(source) = source_metrics.filter(|p| p.exists()) {
         let text = fs::read_to_string(&source)
             .with_context(|| format!("cannot read {}", source.display()))?;
-        write_file_atomically(&run_dir.join(METRICS_FILE), text.as_bytes())?;
-        keep_metrics_up_to(&run_dir.join(METRICS_FILE), iteration)?;
+        write_file_atomically(
+            &run_dir.join(METRICS_FILE),
+            metrics_up_to(&text, iteration).as_bytes(),
+        )?;
     }
     let fork = format!(
         "# this run went on from another run's checkpoint; its first {iteration} iterations are that run's\ncheckpoint = {:?}\niteration = {iteration}\n",
@@ -713,13 +705,30 @@ fn append_line(path: &Path, line: &str) -> Result<()> {
     Ok(())
 }
 
+/// The run directory of a checkpoint: `RUN/checkpoints/iter-N` -> `RUN`
+/// (`None` for a checkpoint outside a run directory).
+fn run_dir_of(checkpoint: &Path) -> Option<PathBuf> {
+    checkpoint
+        .parent()
+        .filter(|p| p.file_name().is_some_and(|n| n == "checkpoints"))
+        .and_then(Path::parent)
+        .map(Path::to_path_buf)
+}
+
 /// On resume: drops the lines of iterations after the checkpoint.
 fn keep_metrics_up_to(path: &Path, iteration: u64) -> Result<()> {
     let Ok(text) = fs::read_to_string(path) else {
         return Ok(());
     };
-    let kept: String = text
-        .lines()
+    Ok(write_file_atomically(
+        path,
+        metrics_up_to(&text, iteration).as_bytes(),
+    )?)
+}
+
+/// The lines of `metrics.jsonl` text for iterations up to `iteration`.
+fn metrics_up_to(text: &str, iteration: u64) -> String {
+    text.lines()
         .filter(|line| {
             serde_json::from_str::<serde_json::Value>(line)
                 .ok()
@@ -727,8 +736,7 @@ fn keep_metrics_up_to(path: &Path, iteration: u64) -> Result<()> {
                 .is_some_and(|i| i <= iteration)
         })
         .map(|line| format!("{line}\n"))
-        .collect();
-    Ok(write_file_atomically(path, kept.as_bytes())?)
+        .collect()
 }
 
 #[cfg(test)]

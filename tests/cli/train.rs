@@ -128,6 +128,19 @@ fn resume_on_two_threads(run: &Path, iterations: &str) -> String {
     ])
 }
 
+/// `train --resume CHECKPOINT --threads 2`, which must succeed.
+fn resume_from(checkpoint: &Path) -> String {
+    ok(&[
+        "train",
+        "--resume",
+        s(checkpoint),
+        "--threads",
+        "2",
+        "--rerun",
+        "off",
+    ])
+}
+
 fn weights(run: &Path) -> Vec<u8> {
     std::fs::read(run.join("latest/weights.safetensors")).unwrap()
 }
@@ -232,9 +245,10 @@ impl TwoStages {
         }
     }
 
-    /// Trains `run` through both stages; the log.
-    fn train(&self, run: &Path) -> String {
-        ok(&[
+    /// `train --config CONFIG --run-dir RUN --threads 2 --rerun off` and
+    /// `extra`.
+    fn args<'a>(&'a self, run: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+        let mut args = vec![
             "train",
             "--config",
             s(&self.config),
@@ -244,7 +258,14 @@ impl TwoStages {
             "2",
             "--rerun",
             "off",
-        ])
+        ];
+        args.extend_from_slice(extra);
+        args
+    }
+
+    /// Trains `run` through both stages; the log.
+    fn train(&self, run: &Path) -> String {
+        ok(&self.args(run, &[]))
     }
 
     /// Run `b`: trained, cut back to its checkpoint of iteration 2 (the end
@@ -257,15 +278,7 @@ impl TwoStages {
         std::fs::remove_dir_all(b.join("checkpoints/iter-000004")).unwrap();
         let checkpoint = b.join("checkpoints/iter-000002");
         check(&checkpoint);
-        ok(&[
-            "train",
-            "--resume",
-            s(&checkpoint),
-            "--threads",
-            "2",
-            "--rerun",
-            "off",
-        ]);
+        resume_from(&checkpoint);
         assert_eq!(weights(&self.a), weights(b), "the resumed stage 2 differs");
         assert_eq!(metrics_without_timing(&self.a), metrics_without_timing(b));
     }
@@ -341,31 +354,10 @@ fn a_fork_ends_as_the_run_from_scratch_and_refuses_a_checkpoint_it_does_not_repr
     // the config forked to: stage 2 with 1-phase episodes instead
     let target = TwoStages::new("fork-target", "\n[curriculum.task]\nmax_phases = 1\n");
     target.train(&target.a);
-    let fork_args = |checkpoint: &Path, run: &Path| -> Vec<String> {
-        [
-            "train",
-            "--config",
-            s(&target.config),
-            "--fork",
-            s(checkpoint),
-            "--run-dir",
-            s(run),
-            "--threads",
-            "2",
-            "--rerun",
-            "off",
-        ]
-        .map(String::from)
-        .to_vec()
-    };
-    fn args(v: &[String]) -> Vec<&str> {
-        v.iter().map(String::as_str).collect()
-    }
-
     // from the end of stage 1, which both configs train alike
     let stage_1_end = source.a.join("checkpoints/iter-000002");
     let forked = &target.b;
-    let log = ok(&args(&fork_args(&stage_1_end, forked)));
+    let log = ok(&target.args(forked, &["--fork", s(&stage_1_end)]));
     assert!(
         log.contains("forked from") && log.contains("at iteration 2"),
         "{log}"
@@ -393,15 +385,7 @@ fn a_fork_ends_as_the_run_from_scratch_and_refuses_a_checkpoint_it_does_not_repr
     for later in ["iter-000003", "iter-000004"] {
         std::fs::remove_dir_all(forked.join("checkpoints").join(later)).unwrap();
     }
-    ok(&[
-        "train",
-        "--resume",
-        s(&forked.join("checkpoints/iter-000002")),
-        "--threads",
-        "2",
-        "--rerun",
-        "off",
-    ]);
+    resume_from(&forked.join("checkpoints/iter-000002"));
     assert_eq!(
         weights(&target.a),
         weights(forked),
@@ -411,17 +395,18 @@ fn a_fork_ends_as_the_run_from_scratch_and_refuses_a_checkpoint_it_does_not_repr
     // from inside the source's stage 2, whose episodes and learning rate
     // the target's stage 2 does not have (the task is compared first)
     let refused = target.a.with_file_name("refused");
-    let mut bad = fork_args(&source.a.join("checkpoints/iter-000003"), &refused);
-    let err = failure(&args(&bad), 1);
+    let inside_stage_2 = source.a.join("checkpoints/iter-000003");
+    let err = failure(&target.args(&refused, &["--fork", s(&inside_stage_2)]), 1);
     assert!(
         err.contains("--fork")
             && err.contains("iteration 3's task: max_phases: 1 against max_phases: 4"),
         "{err}"
     );
     // another seed
-    bad = fork_args(&stage_1_end, &refused);
-    bad.extend(["--seed".to_string(), "7".to_string()]);
-    let err = failure(&args(&bad), 1);
+    let err = failure(
+        &target.args(&refused, &["--fork", s(&stage_1_end), "--seed", "7"]),
+        1,
+    );
     assert!(err.contains("train.seed: 7 against 0"), "{err}");
     assert!(
         !refused.exists(),

@@ -42,11 +42,16 @@
 //! max_phases = 40
 //! goal_spacing_m = 2.0
 //! start_x_range_m = [-0.5, 0.5]
+//! first_goal_ahead_range_m = [0.1, 2.3]  # optional: the first goal's distance ahead
+//!                                # is drawn from this range (default: goal_spacing_m)
+//! goal_y_offset_range_m = [-0.4, 0.4]    # the goals' line aside of the start (default [0, 0])
 //! distance_reward = "new_ground" # quadwalk's default; "progress" is the paper's; or "forward", "tracking"
 //! forward_reward_per_m = 40.0    # R_d per metre with "forward" (both ways)
 //! target_progress_m = 0.025      # the pace per phase "tracking" pays most for
 //! max_paid_progress_m = 0.04     # optional: "new_ground" pays at most this much
 //!                                # new ground per phase (a pace cap), m
+//! orientation_lookahead_m = 1.0  # optional: R_o heads for the first goal at least
+//!                                # this far away (default 0: the current goal, the paper's)
 //! balance_terms = "penalty"      # quadwalk's default: R_o, R_s, R_t, R_r shifted by
 //!                                # their best value (standing earns ~0); "paper": the paper's
 //! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
@@ -605,10 +610,16 @@ impl Experiment {
         let t = &self.task;
         let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\n{}balance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\n{}goal_y_offset_range_m = [{:?}, {:?}]\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\n{}orientation_lookahead_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
             self.terrain.to_string(),
             t.goal_spacing_m,
             t.goal_reached_m,
+            t.first_goal_ahead_range_m
+                .map_or(String::new(), |(low, high)| format!(
+                    "first_goal_ahead_range_m = [{low:?}, {high:?}]\n"
+                )),
+            t.goal_y_offset_range_m.0,
+            t.goal_y_offset_range_m.1,
             t.max_phases,
             t.start_x_range_m.0,
             t.start_x_range_m.1,
@@ -624,6 +635,7 @@ impl Experiment {
             t.max_paid_progress_m.map_or(String::new(), |cap| format!(
                 "max_paid_progress_m = {cap:?}\n"
             )),
+            t.orientation_lookahead_m,
             t.balance_terms.name(),
             t.action_prior.name(),
             o.foot_history,
@@ -786,6 +798,8 @@ fn curriculum_from_doc(
 struct TaskSection {
     goal_spacing_m: Option<f64>,
     goal_reached_m: Option<f64>,
+    first_goal_ahead_range_m: Option<[f64; 2]>,
+    goal_y_offset_range_m: Option<[f64; 2]>,
     max_phases: Option<usize>,
     start_x_range_m: Option<[f64; 2]>,
     start_y_range_m: Option<[f64; 2]>,
@@ -797,6 +811,7 @@ struct TaskSection {
     forward_reward_per_m: Option<f64>,
     target_progress_m: Option<f64>,
     max_paid_progress_m: Option<f64>,
+    orientation_lookahead_m: Option<f64>,
     balance_terms: Option<String>,
     action_prior: Option<String>,
     observation: Option<ObservationSection>,
@@ -866,6 +881,20 @@ impl TaskSection {
         Ok(TaskConfig {
             goal_spacing_m: positive("goal_spacing_m", self.goal_spacing_m, d.goal_spacing_m)?,
             goal_reached_m: positive("goal_reached_m", self.goal_reached_m, d.goal_reached_m)?,
+            first_goal_ahead_range_m: match self.first_goal_ahead_range_m {
+                Some([a, b]) if !(a.is_finite() && b.is_finite() && 0.0 < a && a <= b) => {
+                    return Err(format!(
+                        "first_goal_ahead_range_m must be [low, high] with 0 < low <= high, got [{a}, {b}]"
+                    ));
+                }
+                Some([a, b]) => Some((a, b)),
+                None => d.first_goal_ahead_range_m,
+            },
+            goal_y_offset_range_m: range(
+                "goal_y_offset_range_m",
+                self.goal_y_offset_range_m,
+                d.goal_y_offset_range_m,
+            )?,
             max_phases,
             start_x_range_m: range("start_x_range_m", self.start_x_range_m, d.start_x_range_m)?,
             start_y_range_m: range("start_y_range_m", self.start_y_range_m, d.start_y_range_m)?,
@@ -897,6 +926,15 @@ impl TaskSection {
                 d.target_progress_m,
             )?,
             max_paid_progress_m,
+            orientation_lookahead_m: match self.orientation_lookahead_m {
+                Some(v) if !(v.is_finite() && (0.0..=100.0).contains(&v)) => {
+                    return Err(format!(
+                        "orientation_lookahead_m must be in [0, 100] m, got {v}"
+                    ));
+                }
+                Some(v) => v,
+                None => d.orientation_lookahead_m,
+            },
             balance_terms: match self.balance_terms {
                 Some(name) => BalanceTerms::from_name(&name).ok_or_else(|| {
                     format!(
@@ -1131,6 +1169,25 @@ mod tests {
         );
         assert!(!e.task.observation.foot_history);
         assert_eq!(e.task.observation.size(), 102 - 36);
+        // the first goal: the paper's (goal_spacing_m ahead) unless drawn
+        assert_eq!(e.task.first_goal_ahead_range_m, None);
+        assert_eq!(e.task.goal_y_offset_range_m, (0.0, 0.0));
+        let goals = Experiment::from_toml_builtin(
+            "[terrain]\nspec = \"rigid\"\n[task]\nfirst_goal_ahead_range_m = [0.1, 2.3]\ngoal_y_offset_range_m = [-0.4, 0.4]\norientation_lookahead_m = 1.0\n",
+            "t.toml",
+        )
+        .unwrap();
+        assert_eq!(goals.task.first_goal_ahead_range_m, Some((0.1, 2.3)));
+        assert_eq!(goals.task.goal_y_offset_range_m, (-0.4, 0.4));
+        assert_eq!(goals.task.orientation_lookahead_m, 1.0);
+        assert_eq!(
+            e.task.orientation_lookahead_m, 0.0,
+            "the paper's: the current goal"
+        );
+        assert_eq!(
+            Experiment::from_toml_builtin(&goals.to_toml(), "round trip").unwrap(),
+            goals
+        );
         for (text, expected) in [
             (
                 "[terrain]\nspec = \"rigid\"\n[task]\nmax_phase = 3\n",
@@ -1147,6 +1204,18 @@ mod tests {
             (
                 "[terrain]\nspec = \"rigid\"\n[task]\nstart_x_range_m = [1.0, 0.0]\n",
                 "low <= high",
+            ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[task]\nfirst_goal_ahead_range_m = [0.0, 2.0]\n",
+                "first_goal_ahead_range_m must be [low, high] with 0 < low <= high, got [0, 2]",
+            ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[task]\norientation_lookahead_m = -1.0\n",
+                "orientation_lookahead_m must be in [0, 100] m, got -1",
+            ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[task]\ngoal_y_offset_range_m = [0.4, -0.4]\n",
+                "goal_y_offset_range_m must be [low, high] with low <= high",
             ),
             (
                 "[terrain]\nspec = \"rigid\"\n[task.observation]\nfoot_speed = true\n",

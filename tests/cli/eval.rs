@@ -125,6 +125,14 @@ fn a_fall_is_counted_by_cause_like_the_rollout_ends() {
     assert_eq!(summary["falls_by_cause"]["base_too_low"], 2);
     assert_eq!(e["episodes"][0]["fall"]["phase"], 0);
     assert_eq!(e["episodes"][0]["fall"]["terrain"], "rigid");
+    // the first goal is 2 m ahead of the start: still so at a fall in phase 0
+    let ahead_m = e["episodes"][0]["fall"]["goal_ahead_m"].as_f64().unwrap();
+    assert!((ahead_m - 2.0).abs() < 0.1, "{ahead_m}");
+    assert_eq!(
+        summary["falls_after_a_goal_by_goal_ahead"],
+        serde_json::json!([0, 0, 0, 0]),
+        "no goal was reached"
+    );
 }
 
 /// The crawl on a 3 m field (tiles end at x = 1.5 m) walks off its end: a

@@ -479,6 +479,18 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
             .collect();
         out!("  by link       {}", links.join(", "));
     }
+    let after_a_goal: usize = s.falls_after_a_goal_by_goal_ahead.iter().sum();
+    if after_a_goal > 0 {
+        let bins: Vec<_> = summary::GOAL_AHEAD_BINS
+            .iter()
+            .zip(s.falls_after_a_goal_by_goal_ahead)
+            .map(|(bin, n)| format!("{bin} {n}"))
+            .collect();
+        out!(
+            "  after a goal  {after_a_goal}, by the next goal's distance ahead: {} (it appears 2 m ahead: falls bunched at >= 1.5 m come just after a goal switch)",
+            bins.join(", ")
+        );
+    }
     if s.falls_at_terrain_end > 0 {
         out!(
             "  at the end    {} at the far end of the terrain (walked off it): {}",

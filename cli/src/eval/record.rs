@@ -89,6 +89,11 @@ pub struct Fall {
     /// rather than falling on it
     #[serde(default)]
     pub at_terrain_end: bool,
+    /// the current goal's distance ahead of the base along x at the fall, m
+    /// (absent in files written before 2026-12-01); just after a goal is
+    /// reached the next one is `goal_spacing_m` (2 m) ahead
+    #[serde(default)]
+    pub goal_ahead_m: Option<f64>,
 }
 
 /// How close to the terrain's far end (its extent's largest x) a fall counts
@@ -371,6 +376,9 @@ impl PhaseObserver for EpisodeRecorder {
                 phase: self.phase_log.len() - 1,
                 terrain: label,
                 at_terrain_end: near_terrain_end(task),
+                goal_ahead_m: Some(
+                    task.goal_xy_m()[0] - task.world().base_pose().translation.vector.x,
+                ),
             });
         }
     }

@@ -145,6 +145,15 @@ impl TerrainSummary {
     }
 }
 
+/// The bins of [`Summary::falls_after_a_goal_by_goal_ahead`]: the current
+/// goal's distance ahead of the base at the fall, m.
+pub const GOAL_AHEAD_BINS: [&str; 4] = ["< 0.5 m", "0.5-1 m", "1-1.5 m", ">= 1.5 m"];
+
+/// The [`GOAL_AHEAD_BINS`] index of a goal `ahead_m` ahead.
+pub fn goal_ahead_bin(ahead_m: f64) -> usize {
+    ((ahead_m / 0.5).floor().max(0.0) as usize).min(GOAL_AHEAD_BINS.len() - 1)
+}
+
 /// What every episode together shows.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
@@ -172,6 +181,12 @@ pub struct Summary {
     /// the episode), counted in the causes above too
     #[serde(default)]
     pub falls_at_terrain_end: usize,
+    /// falls after at least one goal was reached, by the current goal's
+    /// distance ahead ([`GOAL_AHEAD_BINS`]): a goal reached puts the next
+    /// one 2 m ahead, so falls bunched in the last bin come within half a
+    /// metre of a goal switch
+    #[serde(default)]
+    pub falls_after_a_goal_by_goal_ahead: [usize; 4],
     /// every terrain type pooled ([`ALL_TERRAIN`]), then each type by label
     pub terrain_types: Vec<TerrainSummary>,
 }
@@ -186,6 +201,12 @@ impl Summary {
         let mut falls_by_cause = BTreeMap::new();
         let mut falls_by_link = BTreeMap::new();
         let mut falls_at_terrain_end = 0;
+        let mut falls_after_a_goal_by_goal_ahead = [0; 4];
+        for episode in episodes.iter().filter(|e| e.goals_reached > 0) {
+            if let Some(ahead_m) = episode.fall.as_ref().and_then(|f| f.goal_ahead_m) {
+                falls_after_a_goal_by_goal_ahead[goal_ahead_bin(ahead_m)] += 1;
+            }
+        }
         for fall in episodes.iter().filter_map(|e| e.fall.as_ref()) {
             falls_at_terrain_end += usize::from(fall.at_terrain_end);
             *falls_by_cause.entry(fall.cause.clone()).or_default() += 1;
@@ -223,6 +244,7 @@ impl Summary {
             falls_by_cause,
             falls_by_link,
             falls_at_terrain_end,
+            falls_after_a_goal_by_goal_ahead,
             terrain_types,
         }
     }
@@ -284,6 +306,7 @@ mod tests {
                 phase: terrains.len() - 1,
                 terrain: last,
                 at_terrain_end: false,
+                goal_ahead_m: Some(1.8),
             }
         });
         EpisodeRecord {
@@ -333,6 +356,22 @@ mod tests {
             "non_foot_contact"
         );
         let s = Summary::of(&episodes, 0.75);
+        assert_eq!(
+            s.falls_after_a_goal_by_goal_ahead, [0; 4],
+            "no episode reached a goal"
+        );
+        // after a goal: episode 1 fell 1.8 m short of the next (just past
+        // the switch), episode 2 0.3 m short of it; a goal 2 m behind
+        // counts in the first bin
+        episodes[1].goals_reached = 3;
+        episodes[2].goals_reached = 1;
+        episodes[2].fall.as_mut().unwrap().goal_ahead_m = Some(0.3);
+        let s = Summary::of(&episodes, 0.75);
+        assert_eq!(s.falls_after_a_goal_by_goal_ahead, [1, 0, 0, 1]);
+        assert_eq!(goal_ahead_bin(-2.0), 0);
+        assert_eq!(goal_ahead_bin(0.5), 1);
+        assert_eq!(goal_ahead_bin(1.49), 2);
+        assert_eq!(goal_ahead_bin(2.3), 3);
         assert_eq!(s.falls_at_terrain_end, 1);
         assert_eq!(s.episodes, 4);
         assert_eq!(s.successes, 2);

@@ -120,6 +120,14 @@ pub struct TaskConfig {
     pub goal_spacing_m: f64,
     /// a goal counts as reached within this distance, m
     pub goal_reached_m: f64,
+    /// the first goal's distance ahead of the start (+x) is drawn uniformly
+    /// from this range (`None`: `goal_spacing_m`, the paper's), m; a goal
+    /// anywhere from beside the robot to a spacing ahead, as an episode
+    /// longer than a training rollout meets it
+    pub first_goal_ahead_range_m: Option<(f64, f64)>,
+    /// the goals' line (their world y) is the start's y plus a draw from
+    /// this range (the paper's: (0, 0), straight ahead), m
+    pub goal_y_offset_range_m: (f64, f64),
     /// phases before an episode is truncated
     pub max_phases: usize,
     /// start x is drawn uniformly from this range, m
@@ -147,6 +155,12 @@ pub struct TaskConfig {
     /// phase (`None`: all of it), m: a pace cap, so that speed past it
     /// earns nothing and only risks a fall
     pub max_paid_progress_m: Option<f64>,
+    /// R_o judges the heading by the azimuth of the first goal on the line
+    /// (the current one, then those `goal_spacing_m` apart beyond it) at
+    /// least this far from the base, m; 0 (the paper's): the current goal,
+    /// whose azimuth swings toward 90 degrees as the robot passes it a few
+    /// centimetres aside, paying a turn on the spot
+    pub orientation_lookahead_m: f64,
     /// how the balance terms pay
     pub balance_terms: BalanceTerms,
     /// what the policy's action is added to
@@ -165,6 +179,8 @@ impl Default for TaskConfig {
         Self {
             goal_spacing_m: 2.0,
             goal_reached_m: 0.3,
+            first_goal_ahead_range_m: None,
+            goal_y_offset_range_m: (0.0, 0.0),
             max_phases: 40,
             start_x_range_m: (-0.5, 0.5),
             start_y_range_m: (-0.2, 0.2),
@@ -177,6 +193,7 @@ impl Default for TaskConfig {
             forward_reward_per_m: 40.0,
             target_progress_m: 0.025,
             max_paid_progress_m: None,
+            orientation_lookahead_m: 0.0,
             balance_terms: BalanceTerms::default(),
             action_prior: ActionPrior::default(),
         }

@@ -82,6 +82,15 @@
 //! base is within `goal_reached_m` of it or past it along x, the next goal
 //! is 2 m further. An episode is truncated (not terminated) after
 //! `max_phases` phases.
+//!
+//! Not the paper's, an option for training: `first_goal_ahead_range_m` and
+//! `goal_y_offset_range_m` draw the first goal's distance ahead and the
+//! goals' line aside, so that episodes cut at 40 phases (about 2 m of gait)
+//! still meet what a long episode does: a goal close by, beside the robot,
+//! or just replaced by the next (a 400-phase evaluation passes eight).
+//! `orientation_lookahead_m` makes R_o judge the heading by the first goal
+//! on the line at least that far away, so passing a goal a little aside
+//! (its azimuth swinging toward 90 degrees) does not pay a turn on the spot.
 
 //!
 //! # Files
@@ -282,27 +291,55 @@ impl Task {
         self.reset_at([x, y], obs);
     }
 
-    /// Starts an episode at (x, y), heading +x.
+    /// Starts an episode at (x, y), heading +x, with the first goal drawn
+    /// from `first_goal_ahead_range_m` and `goal_y_offset_range_m` (no draw
+    /// for the paper's fixed goal, so its seeds keep their starts).
     pub fn reset_at(&mut self, start_xy_m: [f64; 2], obs: &mut [f32]) {
+        let goal_offset_m = self.draw_goal_offset_m();
         self.world.reset_terrain();
         self.world.reset_robot(start_xy_m, 0.0);
         for _ in 0..(self.config.settle_secs / DT_SECS).round() as usize {
             self.world.step();
         }
-        self.begin_episode(obs);
+        self.begin_episode_toward(goal_offset_m, obs);
+    }
+
+    /// The first goal relative to the start (x ahead, y aside), m.
+    fn draw_goal_offset_m(&mut self) -> [f64; 2] {
+        let mut draw = |(low, high): (f64, f64)| {
+            if high > low {
+                self.rng.random_range(low..high)
+            } else {
+                low
+            }
+        };
+        let ahead_m = match self.config.first_goal_ahead_range_m {
+            Some(range) => draw(range),
+            None => self.config.goal_spacing_m,
+        };
+        [ahead_m, draw(self.config.goal_y_offset_range_m)]
     }
 
     /// Starts an episode from the world as it is now (no reset, no
     /// settling): the goal is `goal_spacing_m` ahead of the base along +x.
     /// For crafted states; [`Self::reset`] is the normal start.
     pub fn begin_episode(&mut self, obs: &mut [f32]) {
+        self.begin_episode_toward([self.config.goal_spacing_m, 0.0], obs);
+    }
+
+    /// [`Self::begin_episode`] with the first goal at `goal_offset_m`
+    /// (ahead, aside) from the base.
+    fn begin_episode_toward(&mut self, goal_offset_m: [f64; 2], obs: &mut [f32]) {
         let base = self.world.base_pose().translation.vector;
         let start_xy_m = [base.x, base.y];
         let feet = self.feet_in_base();
         self.episode = Episode {
             phase: 0,
             start_xy_m,
-            goal_xy_m: [start_xy_m[0] + self.config.goal_spacing_m, start_xy_m[1]],
+            goal_xy_m: [
+                start_xy_m[0] + goal_offset_m[0],
+                start_xy_m[1] + goal_offset_m[1],
+            ],
             goals_reached: 0,
             closest_goal_distance_m: 0.0,
             phase_start_feet: [feet; 3],
@@ -458,7 +495,10 @@ impl Task {
                         self.config.target_progress_m,
                     ),
                 },
-                orientation: RewardTerms::orientation_term(rho.y.atan2(rho.x)),
+                orientation: {
+                    let heading = self.heading_target_in_base();
+                    RewardTerms::orientation_term(heading.y.atan2(heading.x))
+                },
                 height: RewardTerms::height_term(self.base_height_m()),
                 torque: RewardTerms::torque_term(torque_norm_sum / steps as f64),
                 roll: RewardTerms::roll_term(roll),
@@ -544,11 +584,34 @@ impl Task {
 
     /// The goal's position in the base frame (x, y; z dropped).
     fn goal_in_base(&self) -> nalgebra::Vector2<f64> {
-        let [gx, gy] = self.episode.goal_xy_m;
+        self.in_base(self.episode.goal_xy_m)
+    }
+
+    /// A world point (x, y) in the base frame (x, y; z dropped).
+    fn in_base(&self, [x, y]: [f64; 2]) -> nalgebra::Vector2<f64> {
         let base = self.world.base_pose();
-        let goal_world = nalgebra::Point3::new(gx, gy, base.translation.z);
-        let g = base.inverse() * goal_world;
-        nalgebra::Vector2::new(g.x, g.y)
+        let p = base.inverse() * nalgebra::Point3::new(x, y, base.translation.z);
+        nalgebra::Vector2::new(p.x, p.y)
+    }
+
+    /// What R_o measures the heading against, in the base frame: the first
+    /// goal on the line (the current one, then every `goal_spacing_m`
+    /// beyond) at least `orientation_lookahead_m` from the base.
+    fn heading_target_in_base(&self) -> nalgebra::Vector2<f64> {
+        let [gx, gy] = self.episode.goal_xy_m;
+        let spacing_m = self.config.goal_spacing_m;
+        let lookahead_m = self.config.orientation_lookahead_m;
+        // a goal k spacings on is at least (k spacings - its distance now)
+        // away, so this many cover any lookahead
+        let most = (lookahead_m / spacing_m).ceil() as usize + 1;
+        let mut target = self.goal_in_base();
+        for k in 1..=most {
+            if target.norm() >= lookahead_m {
+                break;
+            }
+            target = self.in_base([gx + k as f64 * spacing_m, gy]);
+        }
+        target
     }
 }
 
@@ -841,6 +904,117 @@ mod tests {
         let out = task.step_phase(&[0.0; ACTION_SIZE], &mut obs);
         assert_eq!(out.goals_reached, 1, "{out:?}");
         assert_eq!(task.goal_xy_m(), [4.0, 0.0]);
+    }
+
+    #[test]
+    fn first_goals_are_drawn_from_their_ranges_and_the_paper_goal_draws_nothing() {
+        // The paper's goal: 2 m straight ahead of the start, and no draw, so
+        // a seed's starts are the ones it had before the option existed.
+        let starts = |config: TaskConfig| {
+            let mut task = task_on("rigid", config, 7);
+            let mut obs = vec![0.0; 102];
+            (0..6)
+                .map(|_| {
+                    task.reset(&mut obs);
+                    let [sx, sy] = task.start_xy_m();
+                    let [gx, gy] = task.goal_xy_m();
+                    ([sx, sy], [gx - sx, gy - sy], obs.clone())
+                })
+                .collect::<Vec<_>>()
+        };
+        let paper = starts(TaskConfig {
+            settle_secs: 0.0,
+            ..TaskConfig::default()
+        });
+        for (_, offset, _) in &paper {
+            assert!(
+                (offset[0] - 2.0).abs() < 1e-9 && offset[1].abs() < 1e-9,
+                "{offset:?}"
+            );
+        }
+        let pinned = starts(TaskConfig {
+            settle_secs: 0.0,
+            first_goal_ahead_range_m: Some((2.0, 2.0)),
+            goal_y_offset_range_m: (0.0, 0.0),
+            ..TaskConfig::default()
+        });
+        assert_eq!(
+            paper.iter().map(|e| e.0).collect::<Vec<_>>(),
+            pinned.iter().map(|e| e.0).collect::<Vec<_>>(),
+            "degenerate ranges draw nothing: the same starts"
+        );
+
+        let drawn = TaskConfig {
+            settle_secs: 0.0,
+            first_goal_ahead_range_m: Some((0.1, 2.3)),
+            goal_y_offset_range_m: (-0.4, 0.4),
+            ..TaskConfig::default()
+        };
+        let episodes = starts(drawn.clone());
+        assert_eq!(episodes[0].0, paper[0].0, "the start is drawn first");
+        for (_, [ahead, aside], obs) in &episodes {
+            assert!((0.1..2.3).contains(ahead), "ahead {ahead}");
+            assert!((-0.4..0.4).contains(aside), "aside {aside}");
+            // the observation's goal block is that goal in the base frame
+            // (the robot stands level, heading +x, after a reset)
+            let task = task_on("rigid", drawn.clone(), 7);
+            let goal = block(&task, obs, "goal_position");
+            assert!(
+                (f64::from(goal[0]) - ahead).abs() < 0.02
+                    && (f64::from(goal[1]) - aside).abs() < 0.02,
+                "{goal:?} against [{ahead}, {aside}]"
+            );
+        }
+        let aheads: Vec<f64> = episodes.iter().map(|e| e.1[0]).collect();
+        assert!(
+            aheads.windows(2).any(|w| (w[0] - w[1]).abs() > 0.1),
+            "the draws differ between episodes: {aheads:?}"
+        );
+        let again = starts(drawn);
+        assert_eq!(
+            episodes.iter().map(|e| e.1).collect::<Vec<_>>(),
+            again.iter().map(|e| e.1).collect::<Vec<_>>(),
+            "a seed draws the same goals"
+        );
+    }
+
+    #[test]
+    fn the_orientation_term_heads_for_the_first_goal_past_the_lookahead() {
+        // the base 10 cm short of the goal at (2, 0) and 25 cm aside of it
+        let at = |lookahead_m: f64| {
+            let (mut task, _) = crafted(
+                Isometry3::translation(1.9, 0.25, 0.4),
+                TaskConfig {
+                    orientation_lookahead_m: lookahead_m,
+                    ..TaskConfig::default()
+                },
+            );
+            task.episode.goal_xy_m = [2.0, 0.0];
+            let target = task.heading_target_in_base();
+            (
+                target,
+                RewardTerms::orientation_term(target.y.atan2(target.x)),
+            )
+        };
+        // the paper's: the current goal, 68 degrees to the right, pays nothing
+        let (goal, paid) = at(0.0);
+        assert!(
+            (goal.x - 0.1).abs() < 1e-6 && (goal.y + 0.25).abs() < 1e-6,
+            "{goal:?}"
+        );
+        assert_eq!(paid, 0.0);
+        // a 1 m lookahead: the next goal, (4, 0), 6.8 degrees to the right
+        let (next, paid) = at(1.0);
+        assert!(
+            (next.x - 2.1).abs() < 1e-6 && (next.y + 0.25).abs() < 1e-6,
+            "{next:?}"
+        );
+        let azimuth_deg = (0.25f64 / 2.1).atan().to_degrees();
+        assert!((paid - 0.02 * (10.0 - azimuth_deg)).abs() < 1e-6, "{paid}");
+        // a goal already far enough is kept; a long lookahead skips several
+        assert_eq!(at(0.2).0, goal);
+        let (far, _) = at(5.0);
+        assert!((far.x - 6.1).abs() < 1e-6, "{far:?}");
     }
 
     #[test]

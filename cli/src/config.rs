@@ -42,9 +42,9 @@
 //! max_phases = 40
 //! goal_spacing_m = 2.0
 //! start_x_range_m = [-0.5, 0.5]
-//! first_goal_ahead_range_m = [0.1, 2.3]  # optional: the first goal's distance ahead
+//! first_goal_ahead_range_m = [0.3, 2.3]  # optional: the first goal's distance ahead
 //!                                # is drawn from this range (default: goal_spacing_m)
-//! goal_y_offset_range_m = [-0.4, 0.4]    # the goals' line aside of the start (default [0, 0])
+//! goal_y_offset_range_m = [-0.1, 0.1]    # the goals' line aside of the start (default [0, 0])
 //! distance_reward = "new_ground" # quadwalk's default; "progress" is the paper's; or "forward", "tracking"
 //! forward_reward_per_m = 40.0    # R_d per metre with "forward" (both ways)
 //! target_progress_m = 0.025      # the pace per phase "tracking" pays most for
@@ -1546,6 +1546,39 @@ mod tests {
             Some("iteration 641's terrain: varying:2m:2cm,3cm,4cm,5cm,rigid against elastic:5cm")
         );
         assert_eq!(after_5cm.train.keep_checkpoints, 25);
+        // the 5 cm curriculum with the goals drawn from the first tile stage
+        let goals = get("elastic-5cm-goals");
+        assert_eq!(stages_of(goals), stages);
+        assert_eq!(goals.differs_before(rigid, 260), None);
+        for (k, stage) in goals.curriculum.iter().enumerate().skip(1) {
+            let task = stage
+                .task
+                .as_ref()
+                .expect("every tile stage draws the goals");
+            assert_eq!(
+                (
+                    task.first_goal_ahead_range_m,
+                    task.goal_y_offset_range_m,
+                    task.orientation_lookahead_m
+                ),
+                (Some((0.3, 2.3)), (-0.1, 0.1), 1.0),
+                "stage {k}"
+            );
+            let plain = deepening.curriculum[k]
+                .task
+                .as_ref()
+                .unwrap_or(&deepening.task);
+            assert_eq!(
+                TaskConfig {
+                    first_goal_ahead_range_m: None,
+                    goal_y_offset_range_m: (0.0, 0.0),
+                    orientation_lookahead_m: 0.0,
+                    ..task.clone()
+                },
+                *plain,
+                "stage {k}: the goals are its only change"
+            );
+        }
         assert!(
             deepening
                 .differs_before(rigid, 261)

@@ -487,7 +487,7 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
             .map(|(bin, n)| format!("{bin} {n}"))
             .collect();
         out!(
-            "  after a goal  {after_a_goal}, by the next goal's distance ahead: {} (it appears 2 m ahead: falls bunched at >= 1.5 m come just after a goal switch)",
+            "  after a goal  {after_a_goal}, by the next goal's distance ahead: {} (a goal reached puts the next one goal_spacing_m, 2 m by default, ahead: falls bunched at >= 1.5 m came just after a goal switch)",
             bins.join(", ")
         );
     }

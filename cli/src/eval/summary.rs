@@ -202,12 +202,13 @@ impl Summary {
         let mut falls_by_link = BTreeMap::new();
         let mut falls_at_terrain_end = 0;
         let mut falls_after_a_goal_by_goal_ahead = [0; 4];
-        for episode in episodes.iter().filter(|e| e.goals_reached > 0) {
-            if let Some(ahead_m) = episode.fall.as_ref().and_then(|f| f.goal_ahead_m) {
+        for episode in episodes {
+            let Some(fall) = &episode.fall else {
+                continue;
+            };
+            if let Some(ahead_m) = fall.goal_ahead_m.filter(|_| episode.goals_reached > 0) {
                 falls_after_a_goal_by_goal_ahead[goal_ahead_bin(ahead_m)] += 1;
             }
-        }
-        for fall in episodes.iter().filter_map(|e| e.fall.as_ref()) {
             falls_at_terrain_end += usize::from(fall.at_terrain_end);
             *falls_by_cause.entry(fall.cause.clone()).or_default() += 1;
             for link in &fall.links {

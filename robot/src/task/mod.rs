@@ -952,13 +952,13 @@ mod tests {
         };
         let episodes = starts(drawn.clone());
         assert_eq!(episodes[0].0, paper[0].0, "the start is drawn first");
+        let layout = task_on("rigid", drawn.clone(), 7);
         for (_, [ahead, aside], obs) in &episodes {
             assert!((0.1..2.3).contains(ahead), "ahead {ahead}");
             assert!((-0.4..0.4).contains(aside), "aside {aside}");
             // the observation's goal block is that goal in the base frame
             // (the robot stands level, heading +x, after a reset)
-            let task = task_on("rigid", drawn.clone(), 7);
-            let goal = block(&task, obs, "goal_position");
+            let goal = block(&layout, obs, "goal_position");
             assert!(
                 (f64::from(goal[0]) - ahead).abs() < 0.02
                     && (f64::from(goal[1]) - aside).abs() < 0.02,

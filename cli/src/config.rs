@@ -61,6 +61,10 @@
 //! foot_history = false    # drop the three previous phase-start foot positions (-36)
 //! short_history = true    # foot positions 4 and 8 ms ago (24)
 //! foot_velocity = true    # foot velocities (12)
+//! goal_line_ahead_m = 1.0 # optional: the goal blocks show the point on the goals'
+//!                         # line this far ahead of the base, and R_o heads for it
+//!                         # (default: the current goal, the paper's; not with
+//!                         # orientation_lookahead_m)
 //! ```
 //!
 //! ```toml
@@ -439,6 +443,31 @@ impl Experiment {
         }
     }
 
+    /// Keeps the first `iterations` iterations: the total without a
+    /// curriculum; with one, the stages up to that count, the last of them
+    /// cut short (`--iterations` of a new run). A curriculum is not
+    /// lengthened: the error names its total.
+    pub fn keep_first_iterations(&mut self, iterations: u64) -> Result<()> {
+        if self.curriculum.is_empty() {
+            self.train.iterations = iterations;
+            return Ok(());
+        }
+        let total = self.total_iterations();
+        if iterations > total {
+            bail!(
+                "--iterations {iterations}: the curriculum has {total} iterations in its stages; pass at most {total}, or add stages to a config"
+            );
+        }
+        let mut left = iterations;
+        self.curriculum.retain_mut(|stage| {
+            let keep = left > 0;
+            stage.iterations = stage.iterations.min(left);
+            left -= stage.iterations;
+            keep
+        });
+        Ok(())
+    }
+
     /// The terrain of 0-based iteration `iteration`, and the stage index.
     pub fn terrain_at(&self, iteration: u64) -> (usize, &TerrainSpec) {
         let mut end = 0;
@@ -610,7 +639,7 @@ impl Experiment {
         let t = &self.task;
         let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\n{}goal_y_offset_range_m = [{:?}, {:?}]\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\n{}orientation_lookahead_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n\n",
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\n{}goal_y_offset_range_m = [{:?}, {:?}]\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\n{}orientation_lookahead_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n{}\n",
             self.terrain.to_string(),
             t.goal_spacing_m,
             t.goal_reached_m,
@@ -641,6 +670,9 @@ impl Experiment {
             o.foot_history,
             o.short_history,
             o.foot_velocity,
+            o.goal_line_ahead_m.map_or(String::new(), |ahead_m| format!(
+                "goal_line_ahead_m = {ahead_m:?}\n"
+            )),
         );
         let p = &self.physics;
         text.push_str(&format!(
@@ -823,6 +855,7 @@ struct ObservationSection {
     foot_history: Option<bool>,
     short_history: Option<bool>,
     foot_velocity: Option<bool>,
+    goal_line_ahead_m: Option<f64>,
 }
 
 impl TaskSection {
@@ -873,11 +906,30 @@ impl TaskSection {
             }
             v => v,
         };
-        let observation = self.observation.map_or(o, |s| ObservationConfig {
-            foot_history: s.foot_history.unwrap_or(o.foot_history),
-            short_history: s.short_history.unwrap_or(o.short_history),
-            foot_velocity: s.foot_velocity.unwrap_or(o.foot_velocity),
-        });
+        let observation = match self.observation {
+            None => o,
+            Some(s) => ObservationConfig {
+                foot_history: s.foot_history.unwrap_or(o.foot_history),
+                short_history: s.short_history.unwrap_or(o.short_history),
+                foot_velocity: s.foot_velocity.unwrap_or(o.foot_velocity),
+                goal_line_ahead_m: match s.goal_line_ahead_m {
+                    Some(v) if !(v.is_finite() && 0.0 < v && v <= 100.0) => {
+                        return Err(format!(
+                            "observation.goal_line_ahead_m must be in (0, 100] m, got {v}"
+                        ));
+                    }
+                    v => v,
+                },
+            },
+        };
+        if let (Some(ahead_m), Some(lookahead_m)) =
+            (observation.goal_line_ahead_m, self.orientation_lookahead_m)
+            && lookahead_m > 0.0
+        {
+            return Err(format!(
+                "orientation_lookahead_m = {lookahead_m} and observation.goal_line_ahead_m = {ahead_m} both set R_o's heading target (with goal_line_ahead_m, R_o heads for the observed point); keep one of the two"
+            ));
+        }
         Ok(TaskConfig {
             goal_spacing_m: positive("goal_spacing_m", self.goal_spacing_m, d.goal_spacing_m)?,
             goal_reached_m: positive("goal_reached_m", self.goal_reached_m, d.goal_reached_m)?,
@@ -1188,6 +1240,19 @@ mod tests {
             Experiment::from_toml_builtin(&goals.to_toml(), "round trip").unwrap(),
             goals
         );
+        // the goal blocks show the goals' line ahead: same size, round trip
+        assert_eq!(e.task.observation.goal_line_ahead_m, None, "the paper's");
+        let line = Experiment::from_toml_builtin(
+            "[terrain]\nspec = \"rigid\"\n[task.observation]\ngoal_line_ahead_m = 1.5\n",
+            "t.toml",
+        )
+        .unwrap();
+        assert_eq!(line.task.observation.goal_line_ahead_m, Some(1.5));
+        assert_eq!(line.task.observation_size(), 102);
+        assert_eq!(
+            Experiment::from_toml_builtin(&line.to_toml(), "round trip").unwrap(),
+            line
+        );
         for (text, expected) in [
             (
                 "[terrain]\nspec = \"rigid\"\n[task]\nmax_phase = 3\n",
@@ -1222,6 +1287,14 @@ mod tests {
                 "unknown field `foot_speed`",
             ),
             (
+                "[terrain]\nspec = \"rigid\"\n[task.observation]\ngoal_line_ahead_m = 0.0\n",
+                "observation.goal_line_ahead_m must be in (0, 100] m, got 0",
+            ),
+            (
+                "[terrain]\nspec = \"rigid\"\n[task]\norientation_lookahead_m = 1.0\n[task.observation]\ngoal_line_ahead_m = 1.0\n",
+                "orientation_lookahead_m = 1 and observation.goal_line_ahead_m = 1 both set R_o's heading target",
+            ),
+            (
                 "[terrain]\nspec = \"rigid\"\n[task]\ndistance_reward = \"backward\"\n",
                 "distance_reward must be \"progress\" (the paper's), \"new_ground\", \"forward\" or \"tracking\", got \"backward\"",
             ),
@@ -1239,6 +1312,35 @@ mod tests {
                 "{text:?} gave {err:?}"
             );
         }
+    }
+
+    #[test]
+    fn keeping_the_first_iterations_cuts_a_curriculum_and_never_lengthens_it() {
+        let text = "[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n";
+        let e = Experiment::from_toml_builtin(text, "c.toml").unwrap();
+        let cut = |n: u64| {
+            let mut cut = e.clone();
+            cut.keep_first_iterations(n).map(|()| {
+                cut.curriculum
+                    .iter()
+                    .map(|s| (s.terrain.to_string(), s.iterations))
+                    .collect::<Vec<_>>()
+            })
+        };
+        assert_eq!(cut(2).unwrap(), vec![("rigid".to_string(), 2)]);
+        assert_eq!(cut(3).unwrap(), vec![("rigid".to_string(), 3)]);
+        assert_eq!(
+            cut(4).unwrap(),
+            vec![("rigid".to_string(), 3), ("elastic:5cm".to_string(), 1)]
+        );
+        assert_eq!(cut(5).unwrap().len(), 2);
+        let err = format!("{:#}", cut(6).unwrap_err());
+        assert!(err.contains("the curriculum has 5 iterations"), "{err}");
+        // without a curriculum it is the total
+        let mut plain =
+            Experiment::from_toml_builtin("[terrain]\nspec = \"rigid\"\n", "p.toml").unwrap();
+        plain.keep_first_iterations(7).unwrap();
+        assert_eq!(plain.total_iterations(), 7);
     }
 
     #[test]
@@ -1586,6 +1688,18 @@ mod tests {
             "{:?}",
             deepening.differs_before(rigid, 261)
         );
+        // the built-in recipe: the 5 cm curriculum observing the goals' line
+        // 1 m ahead, its only change, in every stage
+        let line = get("elastic-5cm-line");
+        assert_eq!(stages_of(line), stages);
+        assert_eq!(line.ppo, deepening.ppo);
+        for iteration in [0, 260, 500, 839] {
+            let task = line.task_at(iteration);
+            assert_eq!(task.observation.goal_line_ahead_m, Some(1.0));
+            let mut paper_goal = task.clone();
+            paper_goal.observation.goal_line_ahead_m = None;
+            assert_eq!(&paper_goal, deepening.task_at(iteration), "{iteration}");
+        }
     }
 
     #[test]

@@ -39,6 +39,7 @@ mod config;
 mod eval;
 mod export;
 mod policy;
+mod recipes;
 mod rollout;
 mod task_env;
 mod train;

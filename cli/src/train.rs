@@ -178,7 +178,9 @@ fn plan(registry: &Registry, args: &TrainArgs) -> Result<Plan> {
             })?;
         if let Some(n) = args.iterations {
             if !experiment.curriculum.is_empty() {
-                bail!("--iterations cannot change a curriculum's length; edit its stages instead");
+                bail!(
+                    "--iterations cannot change a curriculum's length when resuming; to go on with more stages, --fork this run's checkpoint with a config that has them"
+                );
             }
             experiment.train.iterations = n;
         }
@@ -192,14 +194,21 @@ fn plan(registry: &Registry, args: &TrainArgs) -> Result<Plan> {
         });
     }
     let mut experiment = args.scene.experiment(registry)?;
+    // --terrain (or none) with a built-in recipe for it: the recipe, for
+    // PPO, its learner
+    let recipe = match (args.scene.config_path(), args.algo) {
+        (None, None | Some(Algo::Ppo)) => crate::recipes::recipe_for(&experiment),
+        _ => None,
+    };
+    if let Some(recipe) = recipe {
+        experiment = recipe.experiment(registry)?;
+        eprintln!("{}", recipe.describe(&experiment));
+    }
     if let Some(envs) = args.envs {
         experiment.train.envs = envs as usize;
     }
     if let Some(n) = args.iterations {
-        if !experiment.curriculum.is_empty() {
-            bail!("--iterations cannot change a curriculum's length; edit its stages instead");
-        }
-        experiment.train.iterations = n;
+        experiment.keep_first_iterations(n)?;
     }
     if let Some(seed) = args.seed {
         experiment.train.seed = seed;

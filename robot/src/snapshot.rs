@@ -39,6 +39,9 @@ pub struct StepSnapshot {
     /// the current goal, x and y, m (`None` where there is no task, e.g.
     /// `stand`)
     pub goal_xy_m: Option<[f64; 2]>,
+    /// the point the observation's goal blocks show when it is not the
+    /// current goal (`[task.observation] goal_line_ahead_m`), x and y, m
+    pub observed_goal_xy_m: Option<[f64; 2]>,
 }
 
 /// What a phase is about to do: its three curves and where they are.

@@ -533,6 +533,7 @@ impl World {
             contact_points_m: self.ground_contact_points_m(),
             tiles,
             goal_xy_m,
+            observed_goal_xy_m: None,
         }
     }
 

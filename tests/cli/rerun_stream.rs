@@ -213,6 +213,8 @@ fn a_saved_rollout_holds_the_simulations_values() {
     ] {
         assert!(entities.contains(&path), "{path} missing from {entities:?}");
     }
+    // the paper's observation shows the current goal, already logged
+    assert!(!entities.contains(&"/world/observed_goal"), "{entities:?}");
     for timeline in ["sim_time", "phase"] {
         assert!(
             content["timelines"]
@@ -406,7 +408,7 @@ fn training_streams_rollouts_and_curves() {
     let config = dir.join("tiny.toml");
     std::fs::write(
         &config,
-        "[terrain]\nspec = \"elastic:5cm\"\n[task]\nmax_phases = 3\n[ppo]\nhidden_sizes = [8]\nsteps_per_env = 3\nminibatch_size = 6\nepochs = 1\n[train]\nenvs = 2\nrerun_envs = [0, 1]\n",
+        "[terrain]\nspec = \"elastic:5cm\"\n[task]\nmax_phases = 3\n[task.observation]\ngoal_line_ahead_m = 1.0\n[ppo]\nhidden_sizes = [8]\nsteps_per_env = 3\nminibatch_size = 6\nepochs = 1\n[train]\nenvs = 2\nrerun_envs = [0, 1]\n",
     )
     .unwrap();
     let rrd = dir.join("train.rrd");
@@ -440,6 +442,8 @@ fn training_streams_rollouts_and_curves() {
         "/train/phases_per_s",
         "/world/robot/chassis",
         "/world/terrain/tiles",
+        // the policy observes the goals' line ahead: the point is shown
+        "/world/observed_goal",
     ] {
         assert!(entities.contains(&entity), "{entity} missing: {entities:?}");
     }

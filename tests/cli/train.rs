@@ -823,6 +823,60 @@ fn damaged_and_mismatched_checkpoints_give_clear_errors() {
     );
 }
 
+/// `train --terrain elastic:5cm` runs the built-in 5 cm recipe, and
+/// `--iterations` keeps its first stages.
+#[test]
+fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
+    let dir = scratch_dir("recipe");
+    let run = dir.join("run");
+    let stderr = ok(&[
+        "train",
+        "--terrain",
+        "elastic:5cm",
+        "--envs",
+        "2",
+        "--iterations",
+        "1",
+        "--threads",
+        "1",
+        "--run-dir",
+        s(&run),
+        "--rerun",
+        "off",
+    ]);
+    assert!(
+        stderr.contains("elastic:5cm: quadwalk's recipe (configs/elastic-5cm-line.toml)")
+            && stderr.contains("training (ppo) on rigid"),
+        "{stderr}"
+    );
+    let config = std::fs::read_to_string(run.join("config.toml")).unwrap();
+    assert!(config.contains("goal_line_ahead_m = 1.0"), "{config}");
+    assert!(
+        config.contains("[[curriculum]]\nterrain = \"rigid\"\niterations = 1\n")
+            && !config.contains("elastic:2cm"),
+        "one iteration of the first stage: {config}"
+    );
+    // more iterations than the recipe has: refused, naming its total
+    let err = failure(
+        &[
+            "train",
+            "--terrain",
+            "elastic:5cm",
+            "--iterations",
+            "100000",
+            "--run-dir",
+            s(&dir.join("long")),
+            "--rerun",
+            "off",
+        ],
+        1,
+    );
+    assert!(
+        err.contains("--iterations 100000: the curriculum has 840 iterations"),
+        "{err}"
+    );
+}
+
 #[test]
 fn bad_training_flags_are_refused() {
     let err = failure(&["train", "--envs", "0", "--rerun", "off"], 2);

@@ -14,6 +14,7 @@
 //! | `world/robot/<link>/shape_<k>` | `Boxes3D`, `Ellipsoids3D`, `Cylinders3D`, `Capsules3D` or `Mesh3D` (its collision shapes), static | once |
 //! | `world/base/trajectory` | `LineStrips3D`: the base path so far (a point per centimetre moved, then the current position) | every logged frame |
 //! | `world/goal` | `Points3D` | every logged frame of a task (`stand` has no goal) |
+//! | `world/observed_goal` | `Points3D`: the point on the goals' line the policy observes (`goal_line_ahead_m`) | every logged frame of a task that observes one |
 //! | `world/targets/base` | `LineStrips3D`: the base position curve | every phase start |
 //! | `world/targets/orientation` | `Arrows3D`: the base up axis along the orientation curve | every phase start |
 //! | `world/targets/swing_foot` | `LineStrips3D`: the swing foot curve | every phase start |

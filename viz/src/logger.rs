@@ -437,6 +437,18 @@ impl RolloutLogger {
                 ),
             );
         }
+        if let Some([x, y]) = snap.observed_goal_xy_m {
+            // what the policy steers for: the goals' line ahead of the base
+            results.push(
+                rec.log(
+                    "world/observed_goal",
+                    &rerun::Points3D::new([[x as f32, y as f32, 0.0]])
+                        .with_radii([0.03])
+                        .with_colors([[230, 110, 0]])
+                        .with_labels(["line ahead"]),
+                ),
+            );
+        }
         // Tiles: the top face at -sink, 2 cm thick.
         let thickness = 0.02f32;
         let centres: Vec<[f32; 3]> = snap

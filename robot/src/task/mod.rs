@@ -91,6 +91,14 @@
 //! `orientation_lookahead_m` makes R_o judge the heading by the first goal
 //! on the line at least that far away, so passing a goal a little aside
 //! (its azimuth swinging toward 90 degrees) does not pay a turn on the spot.
+//! `[task.observation] goal_line_ahead_m = L` goes further: the goal blocks
+//! of the observation show the point on the goals' line L m ahead of the
+//! base along +x (pure pursuit's carrot) instead of the current goal, and
+//! R_o heads for that point. The goals still count and still steer R_d, but
+//! the policy sees neither a goal coming close nor the jump to the next
+//! one, which is where the policies that observe the goals fall. Being
+//! part of the observation, it travels with a checkpoint to `eval`, `play`
+//! and `rollout`.
 
 //!
 //! # Files
@@ -541,11 +549,24 @@ impl Task {
     pub fn snapshot(&self, tiles_half_side_m: f64) -> StepSnapshot {
         // During a phase `episode.phase` is the running phase; between
         // phases it is the next one.
-        self.world.snapshot(
+        let mut snapshot = self.world.snapshot(
             tiles_half_side_m,
             self.episode.phase,
             Some(self.episode.goal_xy_m),
-        )
+        );
+        snapshot.observed_goal_xy_m = self.observed_goal_xy_m();
+        snapshot
+    }
+
+    /// The world x, y of what the observation's goal blocks show, where that
+    /// is not the current goal (`goal_line_ahead_m`), m.
+    pub fn observed_goal_xy_m(&self) -> Option<[f64; 2]> {
+        self.config.observation.goal_line_ahead_m.map(|ahead_m| {
+            [
+                self.world.base_pose().translation.x + ahead_m,
+                self.episode.goal_xy_m[1],
+            ]
+        })
     }
 
     fn advance_goals(&mut self) -> usize {
@@ -594,10 +615,26 @@ impl Task {
         nalgebra::Vector2::new(p.x, p.y)
     }
 
-    /// What R_o measures the heading against, in the base frame: the first
-    /// goal on the line (the current one, then every `goal_spacing_m`
-    /// beyond) at least `orientation_lookahead_m` from the base.
+    /// What the observation's goal blocks show, in the base frame: the
+    /// current goal (the paper's), or with `goal_line_ahead_m = L` the point
+    /// on the goals' line (world y of the goals) L m ahead of the base along
+    /// world +x.
+    fn observed_goal_in_base(&self) -> nalgebra::Vector2<f64> {
+        match self.observed_goal_xy_m() {
+            None => self.goal_in_base(),
+            Some(point_xy_m) => self.in_base(point_xy_m),
+        }
+    }
+
+    /// What R_o measures the heading against, in the base frame: the
+    /// observed point when the observation shows the goals' line ahead;
+    /// otherwise the first goal on the line (the current one, then every
+    /// `goal_spacing_m` beyond) at least `orientation_lookahead_m` from the
+    /// base.
     fn heading_target_in_base(&self) -> nalgebra::Vector2<f64> {
+        if self.config.observation.goal_line_ahead_m.is_some() {
+            return self.observed_goal_in_base();
+        }
         let [gx, gy] = self.episode.goal_xy_m;
         let spacing_m = self.config.goal_spacing_m;
         let lookahead_m = self.config.orientation_lookahead_m;
@@ -694,6 +731,7 @@ mod tests {
             foot_history: false,
             short_history: false,
             foot_velocity: false,
+            goal_line_ahead_m: None,
         };
         assert_eq!(none.size(), 30);
         assert_eq!(none.blocks().last().unwrap().1.end, 30);
@@ -1015,6 +1053,58 @@ mod tests {
         assert_eq!(at(0.2).0, goal);
         let (far, _) = at(5.0);
         assert!((far.x - 6.1).abs() < 1e-6, "{far:?}");
+    }
+
+    #[test]
+    fn the_goal_line_ahead_moves_with_the_base_and_r_o_heads_for_it() {
+        let line_ahead = |ahead_m: f64| TaskConfig {
+            observation: ObservationConfig {
+                goal_line_ahead_m: Some(ahead_m),
+                ..ObservationConfig::default()
+            },
+            ..TaskConfig::default()
+        };
+        // the base 10 cm short of the goal at (2, 0) and 25 cm aside of it,
+        // heading +x: the point 1 m ahead on the line is (2.9, 0), at
+        // (1, -0.25) in the base frame, whichever goal is current
+        let (mut task, _) = crafted(Isometry3::translation(1.9, 0.25, 0.4), line_ahead(1.0));
+        task.episode.goal_xy_m = [2.0, 0.0];
+        let mut obs = vec![0.0; task.observation_size()];
+        task.observe(&mut obs);
+        let p = block(&task, &obs, "goal_position");
+        assert!(
+            (p[0] - 1.0).abs() < 1e-5 && (p[1] + 0.25).abs() < 1e-5,
+            "{p:?}"
+        );
+        let azimuth = f64::from(block(&task, &obs, "goal_azimuth")[0]);
+        assert!((azimuth - (-0.25f64).atan2(1.0)).abs() < 1e-5, "{azimuth}");
+        let target = task.heading_target_in_base();
+        assert!((target.x - 1.0).abs() < 1e-6 && (target.y + 0.25).abs() < 1e-6);
+        // the next goal current (as right after passing this one): the same point
+        task.episode.goal_xy_m = [4.0, 0.0];
+        let mut after = vec![0.0; task.observation_size()];
+        task.observe(&mut after);
+        assert_eq!(block(&task, &after, "goal_position"), p);
+        // viewers get the point in the world frame; the paper's task has none
+        let [x, y] = task.snapshot(0.0).observed_goal_xy_m.unwrap();
+        assert!((x - 2.9).abs() < 1e-6 && y.abs() < 1e-12, "{x}, {y}");
+        let (paper, _) = crafted(
+            Isometry3::translation(1.9, 0.25, 0.4),
+            TaskConfig::default(),
+        );
+        assert_eq!(paper.snapshot(0.0).observed_goal_xy_m, None);
+        // turned 90 degrees left at the line: the point is on the right, at (0, -1)
+        let (task, obs) = crafted(
+            Isometry3::new(
+                Vector3::new(0.3, 0.0, 0.6),
+                Vector3::z() * std::f64::consts::FRAC_PI_2,
+            ),
+            line_ahead(1.0),
+        );
+        let p = block(&task, &obs, "goal_position");
+        assert!(p[0].abs() < 1e-5 && (p[1] + 1.0).abs() < 1e-5, "{p:?}");
+        // the same observation size as the paper's: only what the blocks show changes
+        assert_eq!(task.observation_size(), 102);
     }
 
     #[test]

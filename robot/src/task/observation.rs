@@ -6,8 +6,9 @@ use nalgebra::Vector3;
 use super::{ActionPrior, Task};
 use crate::world::DT_SECS;
 
-/// Which optional observation blocks are on (the paper's ablations).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Which optional observation blocks are on (the paper's ablations), and
+/// which point the goal blocks show.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ObservationConfig {
     /// foot positions at the start of the three previous phases (36 values)
     pub foot_history: bool,
@@ -15,6 +16,12 @@ pub struct ObservationConfig {
     pub short_history: bool,
     /// foot velocities (12 values)
     pub foot_velocity: bool,
+    /// `None` (the paper's): the goal blocks (azimuth, position) show the
+    /// current goal. `Some(L)`: they show the point on the goals' line L m
+    /// ahead of the base along +x, which moves with the robot and never
+    /// jumps, and R_o heads for it too (not the paper's; see the module
+    /// docs of [`super`]), m
+    pub goal_line_ahead_m: Option<f64>,
 }
 
 impl Default for ObservationConfig {
@@ -23,6 +30,7 @@ impl Default for ObservationConfig {
             foot_history: true,
             short_history: true,
             foot_velocity: true,
+            goal_line_ahead_m: None,
         }
     }
 }
@@ -106,7 +114,7 @@ impl Task {
                 out.extend(((p - q) / DT_SECS).iter());
             }
         }
-        let goal = self.goal_in_base();
+        let goal = self.observed_goal_in_base();
         out.push(goal.y.atan2(goal.x));
         out.push(goal.x);
         out.push(goal.y);

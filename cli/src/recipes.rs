@@ -1,0 +1,105 @@
+//! Built-in training recipes: what `quadwalk train --terrain SPEC` runs when
+//! no `--config` is given and quadwalk has a recipe for SPEC.
+//!
+//! A recipe is an experiment file in `configs/`, compiled in, so the command
+//! users type first trains what BENCHMARKS.md measured best rather than the
+//! bare defaults. Today one: `elastic:5cm`, the 5 cm recipe
+//! (`configs/elastic-5cm-line.toml`: the rigid recipe, tiles that deepen a
+//! centimetre at a time, then 5 cm tiles; the policy observes the goals'
+//! line ahead). An experiment file whose `[terrain]` names the same spec
+//! trains without it.
+
+use anyhow::{Context, Result};
+use terrain_plugins::Registry;
+
+use crate::config::Experiment;
+
+/// A recipe: the terrain it is for, where its file lives in the
+/// repository, and the file.
+pub struct Recipe {
+    /// the terrain spec `--terrain` names (as the registry writes it)
+    pub terrain: &'static str,
+    /// the file in the repository, for messages
+    pub path: &'static str,
+    /// its text
+    pub toml: &'static str,
+}
+
+/// Every built-in recipe.
+pub const RECIPES: [Recipe; 1] = [Recipe {
+    terrain: "elastic:5cm",
+    path: "configs/elastic-5cm-line.toml",
+    toml: include_str!("../../configs/elastic-5cm-line.toml"),
+}];
+
+/// The recipe for `experiment`'s terrain, if quadwalk has one.
+pub fn recipe_for(experiment: &Experiment) -> Option<&'static Recipe> {
+    let spec = experiment.terrain.to_string();
+    RECIPES.iter().find(|r| r.terrain == spec)
+}
+
+impl Recipe {
+    /// The recipe's experiment.
+    pub fn experiment(&self, registry: &Registry) -> Result<Experiment> {
+        Experiment::from_toml(self.toml, self.path, registry)
+            .with_context(|| format!("the built-in recipe for {}", self.terrain))
+    }
+
+    /// One line on what the recipe does, from its stages (consecutive
+    /// stages on one terrain counted together).
+    pub fn describe(&self, experiment: &Experiment) -> String {
+        let mut runs: Vec<(String, u64)> = Vec::new();
+        for stage in &experiment.curriculum {
+            let terrain = stage.terrain.to_string();
+            match runs.last_mut() {
+                Some((last, n)) if *last == terrain => *n += stage.iterations,
+                _ => runs.push((terrain, stage.iterations)),
+            }
+        }
+        let stages: Vec<String> = runs
+            .iter()
+            .map(|(terrain, n)| format!("{terrain} x{n}"))
+            .collect();
+        format!(
+            "{}: quadwalk's recipe ({}): {} ({} iterations); a --config whose [terrain] spec is {:?} trains without it",
+            self.terrain,
+            self.path,
+            stages.join(" -> "),
+            experiment.total_iterations(),
+            self.terrain,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_recipe_parses_and_is_for_its_terrain() {
+        let registry = Registry::builtin();
+        for recipe in &RECIPES {
+            let e = recipe.experiment(&registry).unwrap();
+            assert_eq!(e.terrain.to_string(), recipe.terrain, "{}", recipe.path);
+            assert!(recipe_for(&e).is_some());
+            assert!(!e.curriculum.is_empty(), "{}", recipe.path);
+            let last = e.curriculum.last().unwrap();
+            assert_eq!(
+                last.terrain.to_string(),
+                recipe.terrain,
+                "it ends on its terrain"
+            );
+            assert!(recipe.describe(&e).contains(recipe.path));
+        }
+        let five = RECIPES[0].experiment(&registry).unwrap();
+        assert!(
+            RECIPES[0].describe(&five).contains(
+                "rigid x260 -> elastic:2cm x60 -> elastic:3cm x60 -> elastic:4cm x60 -> elastic:5cm x400 (840 iterations)"
+            ),
+            "{}",
+            RECIPES[0].describe(&five)
+        );
+        let rigid = Experiment::for_terrain(registry.parse("rigid").unwrap());
+        assert!(recipe_for(&rigid).is_none());
+    }
+}

@@ -426,28 +426,29 @@ impl RolloutLogger {
             "world/base/trajectory",
             &rerun::LineStrips3D::new([strip]).with_colors([[40, 120, 220]]),
         ));
-        if let Some([x, y]) = snap.goal_xy_m {
-            results.push(
-                rec.log(
-                    "world/goal",
-                    &rerun::Points3D::new([[x as f32, y as f32, 0.0]])
-                        .with_radii([0.05])
-                        .with_colors([[230, 180, 0]])
-                        .with_labels(["goal"]),
-                ),
-            );
-        }
-        if let Some([x, y]) = snap.observed_goal_xy_m {
-            // what the policy steers for: the goals' line ahead of the base
-            results.push(
-                rec.log(
-                    "world/observed_goal",
-                    &rerun::Points3D::new([[x as f32, y as f32, 0.0]])
-                        .with_radii([0.03])
-                        .with_colors([[230, 110, 0]])
-                        .with_labels(["line ahead"]),
-                ),
-            );
+        // The goal, and what the policy steers for when that is not the goal
+        // (the goals' line ahead of the base).
+        for (path, point_xy_m, radius_m, colour, label) in [
+            ("world/goal", snap.goal_xy_m, 0.05, [230, 180, 0], "goal"),
+            (
+                "world/observed_goal",
+                snap.observed_goal_xy_m,
+                0.03,
+                [230, 110, 0],
+                "line ahead",
+            ),
+        ] {
+            if let Some([x, y]) = point_xy_m {
+                results.push(
+                    rec.log(
+                        path,
+                        &rerun::Points3D::new([[x as f32, y as f32, 0.0]])
+                            .with_radii([radius_m])
+                            .with_colors([colour])
+                            .with_labels([label]),
+                    ),
+                );
+            }
         }
         // Tiles: the top face at -sink, 2 cm thick.
         let thickness = 0.02f32;

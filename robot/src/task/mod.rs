@@ -632,8 +632,8 @@ impl Task {
     /// `goal_spacing_m` beyond) at least `orientation_lookahead_m` from the
     /// base.
     fn heading_target_in_base(&self) -> nalgebra::Vector2<f64> {
-        if self.config.observation.goal_line_ahead_m.is_some() {
-            return self.observed_goal_in_base();
+        if let Some(point_xy_m) = self.observed_goal_xy_m() {
+            return self.in_base(point_xy_m);
         }
         let [gx, gy] = self.episode.goal_xy_m;
         let spacing_m = self.config.goal_spacing_m;

@@ -1700,6 +1700,35 @@ mod tests {
             paper_goal.observation.goal_line_ahead_m = None;
             assert_eq!(&paper_goal, deepening.task_at(iteration), "{iteration}");
         }
+        // policies/tv2's recipe: the built-in 5 cm recipe to iteration 700,
+        // then T_v2 where that recipe steps its rate down on 5 cm tiles
+        let tv2_line = get("tv2-line");
+        assert_eq!(tv2_line.differs_before(line, 700), None);
+        assert_eq!(
+            tv2_line.differs_before(line, 701).as_deref(),
+            Some("iteration 701's terrain: varying:2m:2cm,3cm,4cm,5cm,rigid against elastic:5cm")
+        );
+        let on_tv2: Vec<_> = stages
+            .iter()
+            .enumerate()
+            .map(|(k, (t, n, r, c))| {
+                let t = if k >= 5 {
+                    tv2.terrain.to_string()
+                } else {
+                    t.clone()
+                };
+                (t, *n, *r, *c)
+            })
+            .collect();
+        assert_eq!(stages_of(tv2_line), on_tv2);
+        assert_eq!(tv2_line.terrain, tv2.terrain);
+        for iteration in [0, 700, 839] {
+            assert_eq!(
+                tv2_line.task_at(iteration),
+                line.task_at(iteration),
+                "{iteration}"
+            );
+        }
     }
 
     #[test]

@@ -1619,18 +1619,25 @@ mod tests {
         let tv2 = get("tv2-curriculum");
         assert_eq!((&tv2.task, &tv2.ppo), (&rigid.task, &rigid.ppo));
         assert_eq!(tv2.terrain.to_string(), "varying:2m:2cm,3cm,4cm,5cm,rigid");
-        let on_tv2: Vec<_> = stages
-            .iter()
-            .map(|(t, n, r, c)| {
-                let t = if t == "elastic:5cm" {
-                    tv2.terrain.to_string()
-                } else {
-                    t.clone()
-                };
-                (t, *n, *r, *c)
-            })
-            .collect();
-        assert_eq!(stages_of(tv2), on_tv2);
+        // the 5 cm curriculum's stages with those from `first` on moved to
+        // T_v2
+        let on_tv2_from = |first: usize| -> Vec<_> {
+            stages
+                .iter()
+                .enumerate()
+                .map(|(k, (t, n, r, c))| {
+                    let t = if k >= first {
+                        tv2.terrain.to_string()
+                    } else {
+                        t.clone()
+                    };
+                    (t, *n, *r, *c)
+                })
+                .collect()
+        };
+        // every 5 cm stage (the fifth on) on T_v2
+        assert_eq!(stages[4].0, "elastic:5cm");
+        assert_eq!(stages_of(tv2), on_tv2_from(4));
         // so a checkpoint of either at iteration 440 is where the other is
         // too (`train --fork`), and the rigid recipe's run is the first 260
         // iterations of both
@@ -1708,19 +1715,7 @@ mod tests {
             tv2_line.differs_before(line, 701).as_deref(),
             Some("iteration 701's terrain: varying:2m:2cm,3cm,4cm,5cm,rigid against elastic:5cm")
         );
-        let on_tv2: Vec<_> = stages
-            .iter()
-            .enumerate()
-            .map(|(k, (t, n, r, c))| {
-                let t = if k >= 5 {
-                    tv2.terrain.to_string()
-                } else {
-                    t.clone()
-                };
-                (t, *n, *r, *c)
-            })
-            .collect();
-        assert_eq!(stages_of(tv2_line), on_tv2);
+        assert_eq!(stages_of(tv2_line), on_tv2_from(5));
         assert_eq!(tv2_line.terrain, tv2.terrain);
         for iteration in [0, 700, 839] {
             assert_eq!(

@@ -1615,7 +1615,7 @@ mod tests {
         );
         assert_eq!(deepening.curriculum[0].iterations, rigid.train.iterations);
         assert_eq!(deepening.learning_rate_at(0), Some(rigid.ppo.learning_rate));
-        // policies/tv2's recipe: the same stages, ending on T_v2
+        // the first T_v2 recipe (2/40): the same stages, ending on T_v2
         let tv2 = get("tv2-curriculum");
         assert_eq!((&tv2.task, &tv2.ppo), (&rigid.task, &rigid.ppo));
         assert_eq!(tv2.terrain.to_string(), "varying:2m:2cm,3cm,4cm,5cm,rigid");
@@ -1707,8 +1707,9 @@ mod tests {
             paper_goal.observation.goal_line_ahead_m = None;
             assert_eq!(&paper_goal, deepening.task_at(iteration), "{iteration}");
         }
-        // policies/tv2's recipe: the built-in 5 cm recipe to iteration 700,
-        // then T_v2 where that recipe steps its rate down on 5 cm tiles
+        // policies/tv2's recipe until 2026-12-02 (32/40): the built-in 5 cm
+        // recipe to iteration 700, then T_v2 where that recipe steps its
+        // rate down on 5 cm tiles
         let tv2_line = get("tv2-line");
         assert_eq!(tv2_line.differs_before(line, 700), None);
         assert_eq!(
@@ -1723,6 +1724,24 @@ mod tests {
                 line.task_at(iteration),
                 "{iteration}"
             );
+        }
+        // policies/tv2's recipe since 2026-12-02: the whole built-in 5 cm
+        // recipe, then 100 iterations of T_v2 whose training episodes start
+        // anywhere in the first 30 m
+        let after_line = get("tv2-after-line");
+        assert_eq!(after_line.differs_before(line, 840), None);
+        assert_eq!(after_line.total_iterations(), 940);
+        for (iteration, rate) in [(840, 5e-5), (879, 5e-5), (880, 2e-5), (939, 2e-5)] {
+            assert_eq!(
+                after_line.terrain_at(iteration).1.to_string(),
+                "varying:2m:2cm,3cm,4cm,5cm,rigid"
+            );
+            assert_eq!(after_line.learning_rate_at(iteration), Some(rate));
+            let task = after_line.task_at(iteration);
+            assert_eq!(task.start_x_range_m, (-0.5, 30.0));
+            let mut line_task = line.task_at(839).clone();
+            line_task.start_x_range_m = task.start_x_range_m;
+            assert_eq!(task, &line_task, "{iteration}");
         }
     }
 

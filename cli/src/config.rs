@@ -1732,10 +1732,7 @@ mod tests {
         assert_eq!(after_line.differs_before(line, 840), None);
         assert_eq!(after_line.total_iterations(), 940);
         for (iteration, rate) in [(840, 5e-5), (879, 5e-5), (880, 2e-5), (939, 2e-5)] {
-            assert_eq!(
-                after_line.terrain_at(iteration).1.to_string(),
-                "varying:2m:2cm,3cm,4cm,5cm,rigid"
-            );
+            assert_eq!(after_line.terrain_at(iteration).1, &tv2.terrain);
             assert_eq!(after_line.learning_rate_at(iteration), Some(rate));
             let task = after_line.task_at(iteration);
             assert_eq!(task.start_x_range_m, (-0.5, 30.0));

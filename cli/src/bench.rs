@@ -44,6 +44,10 @@ pub struct BenchArgs {
     /// Print one JSON object instead of a table
     #[arg(long)]
     json: bool,
+    /// Experiment file whose `[physics]` table sets the simulation
+    /// (default: the built-in physics, `robot::WorldConfig::default`)
+    #[arg(long)]
+    config: Option<std::path::PathBuf>,
     /// Rerun stream of the world on thread 0 during the phase-rate
     /// measurement (default: off; its figures then include the logging)
     #[command(flatten)]
@@ -62,6 +66,7 @@ struct Measurement {
 
 fn measure(
     registry: &Registry,
+    physics: &robot::WorldConfig,
     spec: &str,
     threads: usize,
     seconds: f64,
@@ -70,7 +75,7 @@ fn measure(
     let mut runs = Vec::new();
     let mut last = None;
     for _ in 0..repeat {
-        let m = measure_once(registry, spec, threads, seconds)?;
+        let m = measure_once(registry, physics, spec, threads, seconds)?;
         runs.push(m.steps_per_s);
         last = Some(m);
     }
@@ -118,6 +123,7 @@ fn on_each_thread<S, R: Send>(
 
 fn measure_once(
     registry: &Registry,
+    physics: &robot::WorldConfig,
     spec: &str,
     threads: usize,
     seconds: f64,
@@ -126,11 +132,10 @@ fn measure_once(
     let model = load_robot(None)?;
     let steps = (seconds / robot::DT_SECS).round().max(1.0) as u64;
     let settle_steps = 240;
-    let physics = robot::WorldConfig::default();
     let runs = on_each_thread(
         threads,
         |_| {
-            let mut world = make_world(registry, &spec, model.clone(), 0, [0.0, 0.0], &physics)?;
+            let mut world = make_world(registry, &spec, model.clone(), 0, [0.0, 0.0], physics)?;
             for _ in 0..settle_steps {
                 world.step();
             }
@@ -161,6 +166,7 @@ fn measure_once(
 /// With `logger`, the world on thread 0 is streamed.
 fn measure_phases(
     registry: &Registry,
+    physics: &robot::WorldConfig,
     spec: &str,
     threads: usize,
     phases: u32,
@@ -168,7 +174,6 @@ fn measure_phases(
 ) -> Result<f64> {
     let spec = parse_spec(registry, spec)?;
     let model = load_robot(None)?;
-    let physics = robot::WorldConfig::default();
     let timed = on_each_thread(
         threads,
         |t| {
@@ -178,7 +183,7 @@ fn measure_phases(
                 model.clone(),
                 t as u64,
                 [0.0, 0.0],
-                &physics,
+                physics,
             )?;
             let mut task = Task::new(world, TaskConfig::default(), t as u64);
             let mut obs = vec![0.0f32; task.observation_size()];
@@ -229,6 +234,10 @@ pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
     } else {
         args.terrains.clone()
     };
+    let physics = match &args.config {
+        Some(path) => crate::config::Experiment::from_file(path, registry)?.physics,
+        None => robot::WorldConfig::default(),
+    };
     // Check every spec before the long runs start.
     for spec in &terrains {
         parse_spec(registry, spec)?;
@@ -255,7 +264,7 @@ pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
     let mut phase_rates = Vec::new();
     for spec in &terrains {
         for &n in &threads {
-            let m = measure(registry, spec, n, args.seconds, args.repeat)?;
+            let m = measure(registry, &physics, spec, n, args.seconds, args.repeat)?;
             if !args.json {
                 out!(
                     "{:<48} {:>6} tiles  {:>2} thread(s)  {:>9.0} steps/s  {:>8.0} steps/s per world",
@@ -267,7 +276,8 @@ pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
                 );
             }
             if args.phases > 0 {
-                let phases_per_s = measure_phases(registry, spec, n, args.phases, logger.as_ref())?;
+                let phases_per_s =
+                    measure_phases(registry, &physics, spec, n, args.phases, logger.as_ref())?;
                 if !args.json {
                     out!(
                         "{:<48} {:>6} {:>2} thread(s)  {:>9.1} phases/s  {:>8.1} ms per phase per world",
@@ -310,7 +320,20 @@ pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
             .collect();
         out!(
             "{}",
-            json!({ "cores": cores, "seconds_per_world": args.seconds, "repeat": args.repeat, "dt_s": robot::DT_SECS, "results": rows })
+            json!({
+                "cores": cores,
+                "seconds_per_world": args.seconds,
+                "repeat": args.repeat,
+                "dt_s": robot::DT_SECS,
+                "physics": {
+                    "pd": physics.pd.name(),
+                    "substeps": physics.solver_iterations,
+                    "pgs_iterations": physics.pgs_iterations,
+                    "ccd": physics.ccd,
+                    "prediction_distance_m": physics.prediction_distance_m,
+                },
+                "results": rows
+            })
         );
     }
     if let Some(logger) = logger {

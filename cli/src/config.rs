@@ -76,6 +76,7 @@
 //! kp_n_m_per_rad = 600.0
 //! kd_n_m_s_per_rad = 8.0
 //! friction = 1.0          # of the robot's colliders
+//! prediction_distance_m = 0.02  # rapier's: shapes this close get speculative contacts
 //! ```
 //!
 //! The terrain is given either as a spec string or as a table whose keys are
@@ -676,7 +677,7 @@ impl Experiment {
         );
         let p = &self.physics;
         text.push_str(&format!(
-            "[physics]\npd = {:?}\nsubsteps = {}\npgs_iterations = {}\nccd = {}\nkp_n_m_per_rad = {:?}\nkd_n_m_s_per_rad = {:?}\nfriction = {:?}\n\n",
+            "[physics]\npd = {:?}\nsubsteps = {}\npgs_iterations = {}\nccd = {}\nkp_n_m_per_rad = {:?}\nkd_n_m_s_per_rad = {:?}\nfriction = {:?}\nprediction_distance_m = {:?}\n\n",
             p.pd.name(),
             p.solver_iterations,
             p.pgs_iterations,
@@ -684,6 +685,7 @@ impl Experiment {
             p.kp_n_m_per_rad,
             p.kd_n_m_s_per_rad,
             p.friction,
+            p.prediction_distance_m,
         ));
         text.push_str(&format!("[algo]\nname = {:?}\n\n", self.algo.name()));
         let mut tables = toml::Table::new();
@@ -1019,6 +1021,7 @@ struct PhysicsSection {
     kp_n_m_per_rad: Option<f64>,
     kd_n_m_s_per_rad: Option<f64>,
     friction: Option<f64>,
+    prediction_distance_m: Option<f64>,
 }
 
 impl PhysicsSection {
@@ -1058,6 +1061,15 @@ impl PhysicsSection {
             pgs_iterations: count("pgs_iterations", self.pgs_iterations, d.pgs_iterations)?,
             ccd: self.ccd.unwrap_or(d.ccd),
             friction: at_least("friction", self.friction, 0.0, d.friction)?,
+            prediction_distance_m: match self.prediction_distance_m {
+                Some(v) if !(v.is_finite() && v > 0.0 && v <= 0.1) => {
+                    return Err(format!(
+                        "prediction_distance_m must be in (0, 0.1] m, got {v}"
+                    ));
+                }
+                Some(v) => v,
+                None => d.prediction_distance_m,
+            },
         })
     }
 }
@@ -1454,7 +1466,7 @@ mod tests {
     #[test]
     fn physics_section_sets_the_world_and_round_trips() {
         let e = Experiment::from_toml_builtin(
-            "[terrain]\nspec = \"rigid\"\n[physics]\npd = \"motor\"\nsubsteps = 4\npgs_iterations = 1\nccd = false\nkd_n_m_s_per_rad = 5.0\n",
+            "[terrain]\nspec = \"rigid\"\n[physics]\npd = \"motor\"\nsubsteps = 4\npgs_iterations = 1\nccd = false\nkd_n_m_s_per_rad = 5.0\nprediction_distance_m = 0.005\n",
             "p.toml",
         )
         .unwrap();
@@ -1463,6 +1475,7 @@ mod tests {
         assert_eq!(e.physics.pgs_iterations, 1);
         assert!(!e.physics.ccd);
         assert_eq!(e.physics.kd_n_m_s_per_rad, 5.0);
+        assert_eq!(e.physics.prediction_distance_m, 0.005);
         assert_eq!(
             e.physics.kp_n_m_per_rad,
             WorldConfig::default().kp_n_m_per_rad
@@ -1498,6 +1511,10 @@ mod tests {
             (
                 "[physics]\nfriction = nan\n",
                 "friction must be a finite number >= 0",
+            ),
+            (
+                "[physics]\nprediction_distance_m = 0.5\n",
+                "prediction_distance_m must be in (0, 0.1] m, got 0.5",
             ),
             ("[physics]\nsolver = 3\n", "unknown field `solver`"),
         ] {

@@ -156,6 +156,51 @@ mod tests {
     }
 
     #[test]
+    fn the_default_contact_prediction_is_rapiers() {
+        // The shipped policies were trained with rapier's default; a world
+        // built from the default config must use it to the bit.
+        let world = world_on("rigid", [0.0, 0.0], WorldConfig::default());
+        let rapier = terrain_plugins::rapier3d::prelude::IntegrationParameters::default();
+        assert_eq!(
+            world
+                .physics()
+                .integration_parameters
+                .normalized_prediction_distance
+                .to_bits(),
+            rapier.normalized_prediction_distance.to_bits()
+        );
+    }
+
+    #[test]
+    fn a_shorter_contact_prediction_holds_the_squat_alike() {
+        // Speculative contacts only act when a gap would close within the
+        // step: standing still on 5 cm tiles, 5 mm instead of 2 cm gives
+        // the same squat (joints within 0.01 rad, base within 5 mm) and
+        // the same sink (within 10 % of the named depth).
+        let short = WorldConfig {
+            prediction_distance_m: 0.005,
+            ..WorldConfig::default()
+        };
+        let mut a = world_on("elastic:5cm", [0.0, 0.0], WorldConfig::default());
+        let mut b = world_on("elastic:5cm", [0.0, 0.0], short);
+        assert_eq!(
+            b.physics().integration_parameters.prediction_distance(),
+            0.005
+        );
+        let (ra, rb) = (stand(&mut a, 3.0), stand(&mut b, 3.0));
+        let (qa, qb) = (a.joint_positions_rad(), b.joint_positions_rad());
+        for j in 0..qa.len() {
+            assert!((qa[j] - qb[j]).abs() < 0.01, "joint {j}: {qa:?} vs {qb:?}");
+        }
+        assert!(
+            (ra.base_height_m - rb.base_height_m).abs() < 0.005,
+            "{ra:?} vs {rb:?}"
+        );
+        assert!((rb.mean_loaded_sink_m - 0.05).abs() <= 0.005, "{rb:?}");
+        assert!(rb.non_foot_contacts.is_empty(), "{rb:?}");
+    }
+
+    #[test]
     fn the_implicit_spring_pd_is_capped_at_the_effort() {
         // A knee target 1 rad away (clamped to the joint's limit) asks far
         // more than the URDF's 100 N m; the joint gets, and reports, 100.

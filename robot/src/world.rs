@@ -107,6 +107,14 @@ pub struct WorldConfig {
     pub ccd: bool,
     /// friction coefficient of the robot's colliders
     pub friction: f64,
+    /// how far apart two shapes may be and still get a contact point, m
+    /// (rapier's `normalized_prediction_distance`, its default 0.02 m): a
+    /// point closer than this but not touching is speculative, a solver
+    /// row that acts only if the gap would close within the step. Every
+    /// contact row of the robot costs an LU solve against its 18 x 18 mass
+    /// matrix, and on tiles a sunk foot is within 2 cm of the neighbouring
+    /// tiles' side walls (BENCHMARKS.md, "Contact prediction distance").
+    pub prediction_distance_m: f64,
 }
 
 impl Default for WorldConfig {
@@ -119,6 +127,7 @@ impl Default for WorldConfig {
             pgs_iterations: 4,
             ccd: true,
             friction: 1.0,
+            prediction_distance_m: 0.02,
         }
     }
 }
@@ -191,6 +200,10 @@ impl World {
         physics.integration_parameters.num_solver_iterations = config.solver_iterations;
         physics.integration_parameters.num_internal_pgs_iterations = config.pgs_iterations;
         physics.integration_parameters.max_ccd_substeps = usize::from(config.ccd);
+        // length_unit is 1 (metres), so the normalised distance is in m.
+        physics
+            .integration_parameters
+            .normalized_prediction_distance = config.prediction_distance_m as f32;
         terrain.build(&mut physics);
 
         let robot = insert_robot(&mut physics, &model, &config)?;

@@ -192,6 +192,47 @@ fn bench_reports_steps_per_second_per_terrain_and_thread_count() {
         terrains.contains(&"rigid") && terrains.contains(&"elastic:5cm"),
         "{terrains:?}"
     );
+    assert_eq!(r["physics"]["prediction_distance_m"], 0.02, "{r}");
+}
+
+#[test]
+fn bench_measures_the_physics_of_an_experiment_file() {
+    let config = scratch_file(
+        "bench-physics.toml",
+        "[terrain]\nspec = \"rigid\"\n[physics]\nprediction_distance_m = 0.005\npgs_iterations = 2\n",
+    );
+    let r = json_of(&[
+        "bench",
+        "--config",
+        config.to_str().unwrap(),
+        "--terrain",
+        "rigid",
+        "--seconds",
+        "0.25",
+        "--repeat",
+        "1",
+        "--threads",
+        "1",
+        "--phases",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(r["physics"]["prediction_distance_m"], 0.005, "{r}");
+    assert_eq!(r["physics"]["pgs_iterations"], 2, "{r}");
+    let row = &r["results"][0];
+    assert!(
+        f(row, "steps_per_s") > 0.0 && f(row, "phases_per_s") > 0.0,
+        "{row}"
+    );
+    let bad = scratch_file(
+        "bench-bad-physics.toml",
+        "[terrain]\nspec = \"rigid\"\n[physics]\nprediction_distance_m = 0.0\n",
+    );
+    let stderr = failure(&["bench", "--config", bad.to_str().unwrap()], 1);
+    assert!(
+        stderr.contains("prediction_distance_m") && stderr.starts_with("error: "),
+        "{stderr:?}"
+    );
 }
 
 #[test]

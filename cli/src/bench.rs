@@ -325,13 +325,7 @@ pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
                 "seconds_per_world": args.seconds,
                 "repeat": args.repeat,
                 "dt_s": robot::DT_SECS,
-                "physics": {
-                    "pd": physics.pd.name(),
-                    "substeps": physics.solver_iterations,
-                    "pgs_iterations": physics.pgs_iterations,
-                    "ccd": physics.ccd,
-                    "prediction_distance_m": physics.prediction_distance_m,
-                },
+                "physics": crate::config::physics_json(&physics),
                 "results": rows
             })
         );

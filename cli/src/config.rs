@@ -675,18 +675,7 @@ impl Experiment {
                 "goal_line_ahead_m = {ahead_m:?}\n"
             )),
         );
-        let p = &self.physics;
-        text.push_str(&format!(
-            "[physics]\npd = {:?}\nsubsteps = {}\npgs_iterations = {}\nccd = {}\nkp_n_m_per_rad = {:?}\nkd_n_m_s_per_rad = {:?}\nfriction = {:?}\nprediction_distance_m = {:?}\n\n",
-            p.pd.name(),
-            p.solver_iterations,
-            p.pgs_iterations,
-            p.ccd,
-            p.kp_n_m_per_rad,
-            p.kd_n_m_s_per_rad,
-            p.friction,
-            p.prediction_distance_m,
-        ));
+        text.push_str(&format!("[physics]\n{}\n", physics_toml(&self.physics)));
         text.push_str(&format!("[algo]\nname = {:?}\n\n", self.algo.name()));
         let mut tables = toml::Table::new();
         tables.insert(
@@ -1010,8 +999,19 @@ impl TaskSection {
     }
 }
 
+/// The `[physics]` table's keys and values for `physics` (without the
+/// header): every key spelt out, in the order an experiment file lists them.
+pub fn physics_toml(physics: &WorldConfig) -> String {
+    toml::to_string(&PhysicsSection::from(physics)).expect("physics settings serialise")
+}
+
+/// The `[physics]` settings as JSON, under the keys of the experiment file.
+pub fn physics_json(physics: &WorldConfig) -> serde_json::Value {
+    serde_json::to_value(PhysicsSection::from(physics)).expect("physics settings serialise")
+}
+
 /// `[physics]`: every key optional, defaults from [`WorldConfig::default`].
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct PhysicsSection {
     pd: Option<String>,
@@ -1022,6 +1022,33 @@ struct PhysicsSection {
     kd_n_m_s_per_rad: Option<f64>,
     friction: Option<f64>,
     prediction_distance_m: Option<f64>,
+}
+
+impl From<&WorldConfig> for PhysicsSection {
+    fn from(p: &WorldConfig) -> Self {
+        // Spelt out field by field, so that a new setting fails to compile
+        // here until it has its key.
+        let WorldConfig {
+            kp_n_m_per_rad,
+            kd_n_m_s_per_rad,
+            pd,
+            solver_iterations,
+            pgs_iterations,
+            ccd,
+            friction,
+            prediction_distance_m,
+        } = *p;
+        PhysicsSection {
+            pd: Some(pd.name().to_string()),
+            substeps: Some(solver_iterations),
+            pgs_iterations: Some(pgs_iterations),
+            ccd: Some(ccd),
+            kp_n_m_per_rad: Some(kp_n_m_per_rad),
+            kd_n_m_s_per_rad: Some(kd_n_m_s_per_rad),
+            friction: Some(friction),
+            prediction_distance_m: Some(prediction_distance_m),
+        }
+    }
 }
 
 impl PhysicsSection {
@@ -1528,6 +1555,47 @@ mod tests {
                 "{text:?} gave {err:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_shipped_policys_config_is_what_training_writes() {
+        // `quadwalk train` writes `Experiment::to_toml` into the run and the
+        // export copies it: the shipped files must come back byte for byte,
+        // or `--fork`'s config check and the READMEs' `cmp` would break.
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies");
+        let mut checked = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path().join("config.toml");
+            if !path.exists() {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            let e = Experiment::from_file(&path, &Registry::builtin())
+                .unwrap_or_else(|e| panic!("{e:#}"));
+            assert_eq!(e.to_toml(), text, "{}", path.display());
+            checked += 1;
+        }
+        assert!(checked >= 3, "policies/ has {checked} configs");
+    }
+
+    #[test]
+    fn bench_json_names_every_physics_key_of_the_file() {
+        let physics = WorldConfig {
+            prediction_distance_m: 0.005,
+            ..WorldConfig::default()
+        };
+        let json = physics_json(&physics);
+        let table: toml::Table = toml::from_str(&physics_toml(&physics)).unwrap();
+        let keys: Vec<&String> = json.as_object().unwrap().keys().collect();
+        let mut file_keys: Vec<&String> = table.keys().collect();
+        file_keys.sort();
+        let mut json_keys = keys.clone();
+        json_keys.sort();
+        assert_eq!(json_keys, file_keys);
+        assert_eq!(json["prediction_distance_m"], 0.005);
+        assert_eq!(json["substeps"], 1);
+        assert_eq!(json["kp_n_m_per_rad"], 600.0);
+        assert_eq!(json["pd"], "implicit_spring");
     }
 
     #[test]

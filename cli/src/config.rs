@@ -1811,12 +1811,12 @@ mod tests {
             );
         }
         // policies/tv2's recipe since 2026-12-02: the whole built-in 5 cm
-        // recipe, then 100 iterations of T_v2 and 120 on its hardest
+        // recipe, then 100 iterations of T_v2 and 240 on its hardest
         // passages (rigid ground and 4-5 cm tiles), the training episodes
         // starting anywhere in the first 30 m
         let after_line = get("tv2-after-line");
         assert_eq!(after_line.differs_before(line, 840), None);
-        assert_eq!(after_line.total_iterations(), 1060);
+        assert_eq!(after_line.total_iterations(), 1180);
         let (t_v2, passages) = (tv2.terrain.to_string(), "varying:2m:4cm,5cm,rigid");
         for (iteration, rate, terrain) in [
             (840, 5e-5, t_v2.as_str()),
@@ -1824,7 +1824,7 @@ mod tests {
             (880, 2e-5, &t_v2),
             (939, 2e-5, &t_v2),
             (940, 2e-5, passages),
-            (1059, 2e-5, passages),
+            (1179, 2e-5, passages),
         ] {
             assert_eq!(after_line.terrain_at(iteration).1.to_string(), terrain);
             assert_eq!(after_line.learning_rate_at(iteration), Some(rate));

@@ -329,6 +329,40 @@ fn a_tile_pressed_and_released_returns_to_rest_within_a_second() {
     assert!(secs < 1.0, "tile took {secs} s to return");
 }
 
+#[test]
+fn a_tile_pushed_off_centre_and_sideways_moves_only_along_z() {
+    // The tile's body is guided, not its joint: a load off the tile's
+    // centre and a sideways push (a stance foot's friction) neither tilt
+    // nor slide it at all (a prismatic joint's locked rows held the same
+    // load to ~3e-9 m and rad, the solver's error), and it still sinks its
+    // depth under a quarter of the robot's weight.
+    let (mut world, mut terrain) = world_with("elastic:5cm", 0);
+    let handle = centre_tile(&world);
+    let rest = world.bodies[handle].translation();
+    let corner = rest + Vector::new(0.08, -0.08, 0.0);
+    for _ in 0..480 {
+        let body = &mut world.bodies[handle];
+        body.reset_forces(true);
+        body.reset_torques(true);
+        body.add_force_at_point(
+            Vector::new(60.0, -40.0, -STANDING_LOAD_N as f32),
+            corner,
+            true,
+        );
+        step(&mut world, &mut terrain);
+    }
+    let body = &world.bodies[handle];
+    let moved = body.translation() - rest;
+    assert!(moved.x == 0.0 && moved.y == 0.0, "slid {moved:?}");
+    let tilt_rad = body.rotation().angle_between(Rotation::IDENTITY);
+    assert!(tilt_rad == 0.0, "tilted {tilt_rad} rad");
+    let sink = -terrain.surface_height_m(&world, 0.0, 0.0);
+    assert!(
+        (sink - 0.05).abs() < 0.002,
+        "sink {sink} m under a quarter of the weight"
+    );
+}
+
 /// One step as the robot's world takes it: the terrain's hooks around
 /// rapier's step.
 fn step(world: &mut PhysicsWorld, terrain: &mut Box<dyn Terrain>) {

@@ -1586,11 +1586,10 @@ mod tests {
         };
         let json = physics_json(&physics);
         let table: toml::Table = toml::from_str(&physics_toml(&physics)).unwrap();
-        let keys: Vec<&String> = json.as_object().unwrap().keys().collect();
+        let mut json_keys: Vec<&String> = json.as_object().unwrap().keys().collect();
         let mut file_keys: Vec<&String> = table.keys().collect();
-        file_keys.sort();
-        let mut json_keys = keys.clone();
         json_keys.sort();
+        file_keys.sort();
         assert_eq!(json_keys, file_keys);
         assert_eq!(json["prediction_distance_m"], 0.005);
         assert_eq!(json["substeps"], 1);

@@ -59,6 +59,7 @@
 //!
 //! [task.observation]      # the paper's ablations
 //! foot_history = false    # drop the three previous phase-start foot positions (-36)
+//! foot_history_phases = 2 # or keep only the 2 (or 1) newest of them (-12 each)
 //! short_history = true    # foot positions 4 and 8 ms ago (24)
 //! foot_velocity = true    # foot velocities (12)
 //! goal_line_ahead_m = 1.0 # optional: the goal blocks show the point on the goals'
@@ -102,7 +103,9 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 use learn::sac::SacConfig;
 use learn::{Algo, PpoConfig};
-use robot::task::{ActionPrior, BalanceTerms, DistanceReward, ObservationConfig, TaskConfig};
+use robot::task::{
+    ActionPrior, BalanceTerms, DistanceReward, FOOT_HISTORY_PHASES, ObservationConfig, TaskConfig,
+};
 use robot::{PdModel, WorldConfig};
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
@@ -640,7 +643,7 @@ impl Experiment {
         let t = &self.task;
         let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\n{}goal_y_offset_range_m = [{:?}, {:?}]\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\n{}orientation_lookahead_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\nshort_history = {}\nfoot_velocity = {}\n{}\n",
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\n{}goal_y_offset_range_m = [{:?}, {:?}]\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\n{}orientation_lookahead_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\n{}short_history = {}\nfoot_velocity = {}\n{}\n",
             self.terrain.to_string(),
             t.goal_spacing_m,
             t.goal_reached_m,
@@ -669,6 +672,9 @@ impl Experiment {
             t.balance_terms.name(),
             t.action_prior.name(),
             o.foot_history,
+            (o.foot_history_phases != FOOT_HISTORY_PHASES)
+                .then_some(format!("foot_history_phases = {}\n", o.foot_history_phases))
+                .unwrap_or_default(),
             o.short_history,
             o.foot_velocity,
             o.goal_line_ahead_m.map_or(String::new(), |ahead_m| format!(
@@ -844,6 +850,7 @@ struct TaskSection {
 #[serde(deny_unknown_fields)]
 struct ObservationSection {
     foot_history: Option<bool>,
+    foot_history_phases: Option<usize>,
     short_history: Option<bool>,
     foot_velocity: Option<bool>,
     goal_line_ahead_m: Option<f64>,
@@ -901,6 +908,21 @@ impl TaskSection {
             None => o,
             Some(s) => ObservationConfig {
                 foot_history: s.foot_history.unwrap_or(o.foot_history),
+                foot_history_phases: match s.foot_history_phases {
+                    Some(n) if !(1..=FOOT_HISTORY_PHASES).contains(&n) => {
+                        return Err(format!(
+                            "observation.foot_history_phases must be 1 to {FOOT_HISTORY_PHASES} (the previous phases whose start foot positions are observed), got {n}"
+                        ));
+                    }
+                    Some(_) if s.foot_history == Some(false) => {
+                        return Err(
+                            "observation.foot_history_phases sets the length of the foot-position history, but foot_history = false turns it off; keep one of the two"
+                                .to_string(),
+                        );
+                    }
+                    Some(n) => n,
+                    None => o.foot_history_phases,
+                },
                 short_history: s.short_history.unwrap_or(o.short_history),
                 foot_velocity: s.foot_velocity.unwrap_or(o.foot_velocity),
                 goal_line_ahead_m: match s.goal_line_ahead_m {
@@ -1173,6 +1195,45 @@ mod tests {
 
     fn terrain_from_toml(text: &str, source: &str) -> Result<TerrainSpec> {
         Experiment::from_toml_builtin(text, source).map(|e| e.terrain)
+    }
+
+    #[test]
+    fn a_foot_history_one_phase_shorter_is_set_checked_and_written_back() {
+        let e = Experiment::from_toml_builtin(
+            "[terrain]\nspec = \"rigid\"\n[task.observation]\nfoot_history_phases = 2\n",
+            "t.toml",
+        )
+        .unwrap();
+        assert_eq!(e.task.observation.foot_history_phases, 2);
+        assert_eq!(e.task.observation_size(), 102 - 12);
+        let text = e.to_toml();
+        assert!(text.contains("foot_history_phases = 2\n"), "{text}");
+        assert_eq!(
+            Experiment::from_toml_builtin(&text, "round trip").unwrap(),
+            e
+        );
+        // the paper's 3 is not written (files stay as they were)
+        let full =
+            Experiment::from_toml_builtin("[terrain]\nspec = \"rigid\"\n", "t.toml").unwrap();
+        assert!(!full.to_toml().contains("foot_history_phases"));
+        for (bad, says) in [
+            ("foot_history_phases = 0", "must be 1 to 3"),
+            ("foot_history_phases = 4", "must be 1 to 3"),
+            (
+                "foot_history = false\nfoot_history_phases = 2",
+                "keep one of the two",
+            ),
+        ] {
+            let err = format!(
+                "{:#}",
+                Experiment::from_toml_builtin(
+                    &format!("[terrain]\nspec = \"rigid\"\n[task.observation]\n{bad}\n"),
+                    "t.toml"
+                )
+                .unwrap_err()
+            );
+            assert!(err.contains("t.toml") && err.contains(says), "{bad}: {err}");
+        }
     }
 
     #[test]
@@ -1639,7 +1700,8 @@ mod tests {
         );
         // the paper's configs keep the paper's reward and minibatch exactly
         for (name, e) in &seen {
-            if PAPER.contains(&name.as_str()) || name.starts_with("ablation") {
+            let papers_ablation = name.starts_with("ablation") && !name.starts_with("ablation-5cm");
+            if PAPER.contains(&name.as_str()) || papers_ablation {
                 assert_eq!(e.task.distance_reward, DistanceReward::Progress, "{name}");
                 assert_eq!(e.task.balance_terms, BalanceTerms::Paper, "{name}");
                 assert_eq!(
@@ -1651,6 +1713,25 @@ mod tests {
                     "{name}"
                 );
             }
+        }
+        // the 5 cm recipe's ablations: that recipe, the observation changed
+        let line = get("elastic-5cm-line");
+        for (name, size) in [
+            ("ablation-5cm-no-foot-history", 102 - 36),
+            ("ablation-5cm-history-2-phases", 102 - 12),
+            ("ablation-5cm-no-foot-velocity", 102 - 12),
+        ] {
+            let a = get(name);
+            assert_eq!(a.task.observation.size(), size, "{name}");
+            assert_eq!(a.ppo, line.ppo, "{name}");
+            assert_eq!(a.task.distance_reward, line.task.distance_reward, "{name}");
+            let terrains = |e: &Experiment| -> Vec<(String, u64)> {
+                e.curriculum
+                    .iter()
+                    .map(|s| (s.terrain.to_string(), s.iterations))
+                    .collect()
+            };
+            assert_eq!(terrains(a), terrains(line), "{name}");
         }
         // the shipped policies' recipes are quadwalk's defaults
         let rigid = get("rigid");

@@ -1,8 +1,10 @@
 //! `quadwalk export`: a trained policy for use and for shipping, out of a
 //! checkpoint: the actor and normaliser (`learn::export`), the experiment
 //! it was trained in (`config.toml`), and the run's `metrics.jsonl` up to the
-//! exported iteration. `rollout`, `play` and `eval` take the directory as a
-//! policy; `train --resume` refuses it.
+//! exported iteration; with `--with-checkpoint`, the checkpoint itself in
+//! `checkpoint/`. `rollout`, `play` and `eval` take the directory as a
+//! policy; `train --resume` refuses it, and `train --fork OUT/checkpoint`
+//! goes on from its checkpoint.
 
 use std::path::{Path, PathBuf};
 
@@ -21,7 +23,16 @@ pub struct ExportArgs {
     /// The new directory to write (must not exist)
     #[arg(long)]
     out: PathBuf,
+    /// Also copy the checkpoint itself (critic, optimiser state, sampling
+    /// generator: ~1.5 MB) into OUT/checkpoint/, so that `train --fork
+    /// OUT/checkpoint` goes on from it exactly as from the run
+    #[arg(long)]
+    with_checkpoint: bool,
 }
+
+/// The folder of an exported policy that holds its checkpoint
+/// (`export --with-checkpoint`).
+pub const CHECKPOINT_DIR: &str = "checkpoint";
 
 /// The metrics lines of iterations up to `iteration` (lines that do not
 /// parse, or carry no iteration, are an error naming the line).
@@ -65,19 +76,32 @@ pub fn export(registry: &terrain_plugins::Registry, args: &ExportArgs) -> Result
     let mut files = learner.policy_files()?;
     files.push((CONFIG_FILE.to_string(), config));
     let run_dir = if args.checkpoint.join(LATEST_LINK).exists() {
-        args.checkpoint.clone()
+        Some(args.checkpoint.clone())
     } else {
         std::fs::canonicalize(&checkpoint)
             .ok()
-            .and_then(|c| c.parent().map(Path::to_path_buf))
-            .unwrap_or_default()
+            .and_then(|c| crate::train::run_dir_of(&c))
     };
-    let metrics = run_dir.join(METRICS_FILE);
-    if metrics.is_file() {
+    let metrics = run_dir.map(|r| r.join(METRICS_FILE));
+    if let Some(metrics) = metrics.filter(|m| m.is_file()) {
         files.push((
             METRICS_FILE.to_string(),
             metrics_up_to(&metrics, learner.iteration())?,
         ));
+    }
+    if args.with_checkpoint {
+        // the checkpoint's own files, byte for byte (its state names their
+        // checksum)
+        for name in [
+            learn::checkpoint::WEIGHTS_FILE,
+            learn::checkpoint::STATE_FILE,
+            CONFIG_FILE,
+        ] {
+            let path = checkpoint.join(name);
+            let bytes =
+                std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+            files.push((format!("{CHECKPOINT_DIR}/{name}"), bytes));
+        }
     }
     write_dir_atomically(&args.out, &files)?;
     let bytes: usize = files.iter().map(|(_, b)| b.len()).sum();

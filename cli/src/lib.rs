@@ -1,7 +1,7 @@
 //! The `quadwalk` command line as a library.
 //!
 //! A binary runs every command (`terrain`, `stand`, `rollout`, `play`,
-//! `eval`, `train`, `bench`, `export`) through an [`App`], which holds the
+//! `eval`, `train`, `bench`, `export`, `results`) through an [`App`], which holds the
 //! terrain plugins those commands may use. `quadwalk` itself is
 //! `App::new().run()`; a crate with a terrain model of its own builds its
 //! own binary the same way, with its plugin added:
@@ -40,9 +40,11 @@ mod eval;
 mod export;
 mod policy;
 mod recipes;
+mod results;
 mod rollout;
 mod task_env;
 mod train;
+mod video;
 mod viz_args;
 
 use std::ffi::OsString;
@@ -163,6 +165,8 @@ enum Command {
     Train(train::TrainArgs),
     /// Measure physics steps per second of the robot standing, one world per thread.
     Bench(bench::BenchArgs),
+    /// Regenerate the results pages (Table I, Fig. 4, the policy-by-terrain matrix, the ablations) from a plan of evaluations.
+    Results(results::ResultsArgs),
     /// Write a trained policy for use or shipping: actor, normaliser, config and metrics, without optimiser state.
     Export(export::ExportArgs),
 }
@@ -202,6 +206,7 @@ fn run_command(command: Command, registry: &Arc<Registry>) -> anyhow::Result<()>
         Command::Eval(args) => eval::eval(registry, &args),
         Command::Train(args) => train::train(registry, &args),
         Command::Bench(args) => bench::run(registry, &args),
+        Command::Results(args) => results::results(registry, &args),
         Command::Export(args) => export::export(registry, &args),
     }
 }

@@ -13,6 +13,7 @@ use viz::RerunSink;
 
 use crate::commands::{SceneArgs, make_world};
 use crate::policy::Policy;
+use crate::video::{Both, VideoArgs, VideoRecorder};
 use crate::viz_args::{RerunArgs, print_warnings};
 use terrain_plugins::Registry;
 
@@ -47,6 +48,8 @@ pub struct RolloutArgs {
     flags: RunFlags,
     #[command(flatten)]
     rerun: RerunArgs,
+    #[command(flatten)]
+    video: VideoArgs,
 }
 
 /// Arguments of `quadwalk play`.
@@ -70,6 +73,8 @@ pub struct PlayArgs {
     /// Rerun stream (default for play: spawn)
     #[command(flatten)]
     rerun: RerunArgs,
+    #[command(flatten)]
+    video: VideoArgs,
 }
 
 /// What `rollout` and `play` share.
@@ -80,6 +85,7 @@ struct Run<'a> {
     phases: u32,
     flags: &'a RunFlags,
     rerun: &'a RerunArgs,
+    video: &'a VideoArgs,
     default_sink: RerunSink,
 }
 
@@ -94,6 +100,7 @@ pub fn rollout(registry: &Registry, args: &RolloutArgs) -> Result<()> {
             phases: args.phases,
             flags: &args.flags,
             rerun: &args.rerun,
+            video: &args.video,
             default_sink: RerunSink::Off,
         },
     )
@@ -111,6 +118,7 @@ pub fn play(registry: &Registry, args: &PlayArgs) -> Result<()> {
             phases: args.phases,
             flags: &args.flags,
             rerun: &args.rerun,
+            video: &args.video,
             default_sink: RerunSink::Spawn,
         },
     )
@@ -127,6 +135,7 @@ fn stats(values: &[f64]) -> serde_json::Value {
 }
 
 fn run(registry: &Registry, args: &Run) -> Result<()> {
+    args.video.check()?;
     let experiment = args.scene.experiment(registry)?;
     let (spec, mut task_config, mut physics) =
         (experiment.terrain, experiment.task, experiment.physics);
@@ -141,7 +150,7 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
     let world = make_world(
         registry,
         &spec,
-        model,
+        model.clone(),
         args.flags.seed,
         [0.0, 0.0],
         &physics,
@@ -156,11 +165,18 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
             args.command, args.policy, args.flags.seed
         ),
     )?;
+    let mut video = args.video.recorder(
+        model,
+        &format!("{} (seed {})", args.policy, args.flags.seed),
+    )?;
     let mut obs = vec![0.0f32; task.observation_size()];
     task.reset(&mut obs);
     let start = task.start_xy_m();
     logger.log_terrain(task.world().terrain());
     logger.log_now(&task);
+    if let Some(v) = &mut video {
+        v.frame(&task);
+    }
 
     let mut terms_sum = [0.0f64; 5];
     let mut reward_sum = 0.0;
@@ -172,7 +188,10 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
     let mut phases = 0;
     while !task.done() {
         let action = policy.action(&task, &obs)?;
-        let outcome = task.step_phase_observed(&action, &mut obs, &mut logger);
+        let outcome = match &mut video {
+            Some(v) => task.step_phase_observed(&action, &mut obs, &mut Both(&mut logger, v)),
+            None => task.step_phase_observed(&action, &mut obs, &mut logger),
+        };
         print_warnings(&mut logger);
         phases += 1;
         reward_sum += outcome.reward;
@@ -193,6 +212,7 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
     }
     logger.finish();
     print_warnings(&mut logger);
+    let video = video.map(VideoRecorder::finish).transpose()?;
     let base = task.world().base_pose().translation.vector;
     let distance_m = base.x - start[0];
     let lateral_drift_m = base.y - start[1];
@@ -230,6 +250,11 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
             "ik_clamped": ik_clamped,
             "regions": regions,
             "rerun_frames": logger.frames_logged(),
+            "video": video.as_ref().map(|v| json!({
+                "path": v.path.display().to_string(),
+                "frames": v.frames,
+                "steps_per_frame": v.steps_per_frame,
+            })),
         });
         out!("{out}");
     } else {
@@ -275,6 +300,14 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
         out!("IK clamps       {ik_clamped}");
         if logger.frames_logged() > 0 {
             out!("rerun frames    {}", logger.frames_logged());
+        }
+        if let Some(v) = &video {
+            out!(
+                "video           {} ({} frames, one every {} physics steps)",
+                v.path.display(),
+                v.frames,
+                v.steps_per_frame
+            );
         }
     }
     Ok(())

@@ -714,14 +714,17 @@ fn append_line(path: &Path, line: &str) -> Result<()> {
     Ok(())
 }
 
-/// The run directory of a checkpoint: `RUN/checkpoints/iter-N` -> `RUN`
-/// (`None` for a checkpoint outside a run directory).
-fn run_dir_of(checkpoint: &Path) -> Option<PathBuf> {
-    checkpoint
-        .parent()
-        .filter(|p| p.file_name().is_some_and(|n| n == "checkpoints"))
-        .and_then(Path::parent)
-        .map(Path::to_path_buf)
+/// Where a checkpoint's run keeps its metrics: `RUN/checkpoints/iter-N` ->
+/// `RUN`, `POLICY/checkpoint` -> `POLICY` (`None` for a checkpoint outside
+/// either).
+pub(crate) fn run_dir_of(checkpoint: &Path) -> Option<PathBuf> {
+    let parent = checkpoint.parent()?;
+    if parent.file_name().is_some_and(|n| n == "checkpoints") {
+        return parent.parent().map(Path::to_path_buf);
+    }
+    // a policy exported with its checkpoint (`export --with-checkpoint`)
+    // keeps the run's metrics beside it
+    learn::export::is_exported_policy(parent).then(|| parent.to_path_buf())
 }
 
 /// On resume: drops the lines of iterations after the checkpoint.

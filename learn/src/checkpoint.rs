@@ -484,7 +484,11 @@ pub fn write_dir_atomically(target: &Path, files: &[(String, Vec<u8>)]) -> Resul
         .ok()
         .and_then(|v| v.parse().ok());
     for (k, (file, bytes)) in files.iter().enumerate() {
-        write_synced(&staging.join(file), bytes)?;
+        let path = staging.join(file);
+        if let Some(dir) = path.parent().filter(|d| *d != staging) {
+            fs::create_dir_all(dir).map_err(|e| io("create the directory", dir, e))?;
+        }
+        write_synced(&path, bytes)?;
         if k == 0
             && let Some(ms) = pause_ms
         {

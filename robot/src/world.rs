@@ -157,6 +157,14 @@ pub struct GroundContacts {
     pub non_foot_links: Vec<String>,
 }
 
+/// Which robot colliders a contact query examines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Examined {
+    Feet,
+    NonFeet,
+    All,
+}
+
 struct RobotHandles {
     /// rigid body of each model body
     bodies: Vec<RigidBodyHandle>,
@@ -479,6 +487,19 @@ impl World {
         })
     }
 
+    /// The velocity of each foot's lowest material point (the bottom of its
+    /// sphere, where it meets flat ground), world frame, m/s, per leg: zero
+    /// while a foot rolls on the ground without sliding, however its centre
+    /// moves.
+    pub fn foot_sole_velocities_m_per_s(&self) -> [Vector3<f64>; 4] {
+        self.model.legs.clone().map(|leg| {
+            let body = &self.physics.bodies[self.robot.bodies[leg.foot_body]];
+            let centre = from_pose(body.position()) * Point3::from(leg.foot_in_body_m);
+            let sole = centre.coords - Vector3::z() * leg.foot_radius_m;
+            from_vector(body.velocity_at_point(to_vector(&sole)))
+        })
+    }
+
     /// Angle between the base's up axis and the world's, rad.
     pub fn tilt_rad(&self) -> f64 {
         let up = self.base_pose().rotation * Vector3::z();
@@ -491,13 +512,19 @@ impl World {
     /// contact manifolds are not read: with contact recycling their
     /// distances can be several steps old.)
     pub fn ground_contacts(&self) -> GroundContacts {
-        self.contacts(true)
+        self.contacts(Examined::All)
+    }
+
+    /// Which feet touch the ground now: [`Self::ground_contacts`]'s `feet`,
+    /// without examining the other links.
+    pub fn feet_touching_ground(&self) -> [bool; 4] {
+        self.contacts(Examined::Feet).feet
     }
 
     /// The links other than feet that touch the ground now (the termination
     /// check: feet are not examined).
     pub fn non_foot_contacts(&self) -> Vec<String> {
-        self.contacts(false).non_foot_links
+        self.contacts(Examined::NonFeet).non_foot_links
     }
 
     /// h_b: height of each hip (abduction) joint above the terrain right
@@ -587,12 +614,13 @@ impl World {
         })
     }
 
-    fn contacts(&self, with_feet: bool) -> GroundContacts {
+    fn contacts(&self, examined: Examined) -> GroundContacts {
         let mut contacts = GroundContacts::default();
         for (handle, link, foot_leg) in &self.robot.colliders {
-            let known = match foot_leg {
-                Some(leg) => !with_feet || contacts.feet[*leg],
-                None => contacts.non_foot_links.contains(link),
+            let known = match (foot_leg, examined) {
+                (Some(_), Examined::NonFeet) | (None, Examined::Feet) => true,
+                (Some(leg), _) => contacts.feet[*leg],
+                (None, _) => contacts.non_foot_links.contains(link),
             };
             if known {
                 continue;

@@ -9,7 +9,9 @@ use serde_json::Value;
 mod eval;
 #[cfg(feature = "rerun")]
 mod rerun_stream;
+mod results;
 mod train;
+mod video;
 
 fn quadwalk(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_quadwalk"))

@@ -421,6 +421,60 @@ fn a_fork_ends_as_the_run_from_scratch_and_refuses_a_checkpoint_it_does_not_repr
     assert!(err.contains("--fork") && err.contains("--resume"), "{err}");
 }
 
+/// `export --with-checkpoint`: the exported policy carries its checkpoint,
+/// byte for byte, and a fork from it ends as the fork from the run's own
+/// checkpoint, with the run's metrics up to it.
+#[test]
+fn a_policy_exported_with_its_checkpoint_forks_like_the_run() {
+    let source = TwoStages::new("export-fork-source", "learning_rate = 5e-5\n");
+    source.train(&source.a);
+    let target = TwoStages::new(
+        "export-fork-target",
+        "\n[curriculum.task]\nmax_phases = 1\n",
+    );
+    target.train(&target.a);
+    let stage_1_end = source.a.join("checkpoints/iter-000002");
+    let policy = source.a.with_file_name("exported");
+    ok(&[
+        "export",
+        "--checkpoint",
+        s(&stage_1_end),
+        "--out",
+        s(&policy),
+        "--with-checkpoint",
+    ]);
+    for name in ["weights.safetensors", "state.toml", "config.toml"] {
+        assert_eq!(
+            std::fs::read(policy.join("checkpoint").join(name)).unwrap(),
+            std::fs::read(stage_1_end.join(name)).unwrap(),
+            "{name}"
+        );
+    }
+    // the policy's metrics stop at the exported iteration
+    let exported_metrics = std::fs::read_to_string(policy.join("metrics.jsonl")).unwrap();
+    assert_eq!(exported_metrics.lines().count(), 2);
+    let forked = &target.b;
+    ok(&target.args(forked, &["--fork", s(&policy.join("checkpoint"))]));
+    assert_eq!(weights(&target.a), weights(forked));
+    assert_eq!(
+        metrics_without_timing(&target.a),
+        metrics_without_timing(forked),
+        "the fork's metrics begin with the policy's"
+    );
+    // the policy itself still acts
+    let rollout = json_of(&[
+        "rollout",
+        "--policy",
+        s(&policy),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(rollout["phases"], 2);
+}
+
 /// [`TINY`] learned by SAC: learning starts after 8 transitions.
 const TINY_SAC: &str = "\n[algo]\nname = \"sac\"\n\n[sac]\nhidden_sizes = [16]\nbatch_size = 8\nlearning_starts = 8\nsteps_per_env = 4\nbuffer_size = 1000\n";
 

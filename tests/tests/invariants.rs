@@ -302,3 +302,30 @@ fn the_robot_stands_on_steps_and_rough_ground_at_their_height() {
         "{a:?} vs {b:?}"
     );
 }
+
+#[test]
+fn standing_soles_stay_still_and_slide_with_the_robot_on_a_slippery_slope() {
+    let registry = Registry::builtin();
+    // standing on rigid ground: every touching sole is still (to 2 mm/s)
+    let mut world = world_on(&registry, "rigid", [0.0, 0.0], 0);
+    robot::stand(&mut world, 2.0);
+    let touching = world.ground_contacts().feet;
+    assert_eq!(touching, [true; 4]);
+    assert_eq!(world.feet_touching_ground(), touching);
+    for (leg, v) in world.foot_sole_velocities_m_per_s().iter().enumerate() {
+        assert!(v.norm() < 0.002, "leg {leg}: sole at {v:?} m/s");
+    }
+    // sliding down a 10 degree slope at friction 0.1: the soles slide with
+    // the base (to 1 cm/s), at the same speed down the slope
+    let mut world = world_on(&registry, "slope:10:friction=0.1", [0.0, 0.0], 0);
+    robot::stand(&mut world, 3.0);
+    let (base_v, _) = world.base_velocity();
+    assert!(base_v.x < -0.1, "slides down: {base_v:?}");
+    for (leg, v) in world.foot_sole_velocities_m_per_s().iter().enumerate() {
+        let horizontal = (v.x - base_v.x).hypot(v.y - base_v.y);
+        assert!(
+            horizontal < 0.01,
+            "leg {leg}: sole {v:?} against the base's {base_v:?} m/s"
+        );
+    }
+}

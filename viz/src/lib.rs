@@ -60,6 +60,14 @@ pub const APPLICATION_ID: &str = "quadwalk";
 /// Tiles are coloured from grey (at rest) to red at this sink, m.
 pub const FULL_COLOUR_SINK_M: f64 = 0.10;
 
+/// A tile's colour, RGB: grey at rest to red at [`FULL_COLOUR_SINK_M`]
+/// (and beyond), linear in between. Every view of the tiles uses it.
+pub fn sink_colour(sink_m: f64) -> [u8; 3] {
+    let u = (sink_m / FULL_COLOUR_SINK_M).clamp(0.0, 1.0);
+    let lerp = |a: f64, b: f64| (a + (b - a) * u).round() as u8;
+    [lerp(170.0, 230.0), lerp(170.0, 40.0), lerp(170.0, 40.0)]
+}
+
 /// Settings of a logger.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VizSettings {
@@ -101,4 +109,17 @@ pub enum VizError {
         /// Rerun's error
         message: String,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_go_from_grey_to_red() {
+        assert_eq!(sink_colour(0.0), [170, 170, 170]);
+        assert_eq!(sink_colour(FULL_COLOUR_SINK_M / 2.0), [200, 105, 105]);
+        assert_eq!(sink_colour(FULL_COLOUR_SINK_M), [230, 40, 40]);
+        assert_eq!(sink_colour(1.0), [230, 40, 40]);
+    }
 }

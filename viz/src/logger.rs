@@ -14,7 +14,7 @@ use robot::snapshot::{PhaseObserver, PhaseStart, StepSnapshot};
 use robot::task::{PhaseOutcome, RewardTerms, Task};
 use terrain_plugins::Terrain;
 
-use crate::{APPLICATION_ID, FULL_COLOUR_SINK_M, RerunSink, VizError, VizSettings};
+use crate::{APPLICATION_ID, RerunSink, VizError, VizSettings, sink_colour};
 
 /// A live gRPC sink the logger keeps an eye on: when its viewer goes away the
 /// logger warns once and stops logging, so the run goes on.
@@ -654,13 +654,6 @@ fn transform(pose: &Isometry3<f64>) -> rerun::Transform3D {
     )
 }
 
-/// Grey at rest to red at [`FULL_COLOUR_SINK_M`].
-fn sink_colour(sink_m: f64) -> [u8; 3] {
-    let u = (sink_m / FULL_COLOUR_SINK_M).clamp(0.0, 1.0);
-    let lerp = |a: f64, b: f64| (a + (b - a) * u).round() as u8;
-    [lerp(170.0, 230.0), lerp(170.0, 40.0), lerp(170.0, 40.0)]
-}
-
 /// Vertices and triangles of a convex hull.
 fn convex_hull(points_m: &[Vector3<f64>]) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     use terrain_plugins::rapier3d::prelude::Vector;
@@ -716,13 +709,6 @@ mod tests {
     use std::path::PathBuf;
 
     use super::*;
-
-    #[test]
-    fn tiles_go_from_grey_to_red() {
-        assert_eq!(sink_colour(0.0), [170, 170, 170]);
-        assert_eq!(sink_colour(FULL_COLOUR_SINK_M), [230, 40, 40]);
-        assert_eq!(sink_colour(1.0), [230, 40, 40]);
-    }
 
     #[test]
     fn link_names_become_single_path_parts() {

@@ -9,9 +9,9 @@
 //! the same actions.
 
 mod compare;
-mod plots;
+pub(crate) mod plots;
 pub(crate) mod record;
-mod summary;
+pub(crate) mod summary;
 mod table1;
 
 use std::path::{Path, PathBuf};
@@ -27,6 +27,7 @@ use terrain_plugins::{Registry, TerrainSpec};
 
 use crate::commands::{SceneArgs, make_world};
 use crate::policy::Policy;
+use crate::video::{Both, VideoArgs, VideoRecorder, VideoSummary};
 use crate::viz_args::RerunArgs;
 pub use plots::FIGURE_FILES;
 use record::{EpisodeRecord, EpisodeRecorder};
@@ -79,10 +80,12 @@ pub struct EvalArgs {
     out: Option<PathBuf>,
     /// Lay these evaluations (directories holding eval.json) side by side
     /// instead of running one
-    #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["policy", "terrain", "config", "robot", "episodes", "phases", "seed", "stochastic", "threads"])]
+    #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["policy", "terrain", "config", "robot", "episodes", "phases", "seed", "stochastic", "threads", "video"])]
     compare: Vec<PathBuf>,
     #[command(flatten)]
     rerun: RerunArgs,
+    #[command(flatten)]
+    video: VideoArgs,
 }
 
 /// What an evaluation writes to [`REPORT_FILE`].
@@ -121,8 +124,13 @@ fn phase_secs() -> f64 {
 }
 
 /// Runs one episode of `policy` on `scene` with `seed`: the world, start and
-/// actions of `quadwalk rollout --seed SEED`.
-fn run_episode(policy: &mut Policy, scene: &Scene, seed: u64) -> Result<EpisodeRecord> {
+/// actions of `quadwalk rollout --seed SEED`; `video`, when given, draws it.
+fn run_episode(
+    policy: &mut Policy,
+    scene: &Scene,
+    seed: u64,
+    mut video: Option<&mut VideoRecorder>,
+) -> Result<EpisodeRecord> {
     let world = make_world(
         scene.registry,
         &scene.spec,
@@ -137,11 +145,16 @@ fn run_episode(policy: &mut Policy, scene: &Scene, seed: u64) -> Result<EpisodeR
     let start = task.start_xy_m();
     let mut recorder = EpisodeRecorder::default();
     let mut reward_total = 0.0;
+    if let Some(v) = video.as_deref_mut() {
+        v.frame(&task);
+    }
     while !task.done() {
         let action = policy.action(&task, &obs)?;
-        reward_total += task
-            .step_phase_observed(&action, &mut obs, &mut recorder)
-            .reward;
+        let outcome = match video.as_deref_mut() {
+            Some(v) => task.step_phase_observed(&action, &mut obs, &mut Both(&mut recorder, v)),
+            None => task.step_phase_observed(&action, &mut obs, &mut recorder),
+        };
+        reward_total += outcome.reward;
     }
     let end = task.world().base_pose().translation.vector;
     Ok(recorder.finish(
@@ -192,65 +205,111 @@ fn default_out_dir(policy: &str, spec: &str, seed: u64) -> PathBuf {
     run.join(name)
 }
 
-/// `quadwalk eval`.
-pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
-    if !args.compare.is_empty() {
-        return compare::compare(&args.compare, args.out.as_deref(), args.json);
-    }
-    let experiment = args.scene.experiment(registry)?;
-    let (spec, mut task, mut physics) = (experiment.terrain, experiment.task, experiment.physics);
-    let sample = |seed: u64| args.stochastic.then_some(seed);
-    let policy = Policy::from_arg(registry, &args.policy, sample(args.seed))?;
-    policy.fit_scene(&mut task, &mut physics, args.scene.config_path())?;
-    task.max_phases = args.phases as usize;
-    let scene = Scene {
+/// One evaluation: a policy on a scene over a list of episode seeds.
+pub struct EvalRequest {
+    /// `scripted`, or a checkpoint, run directory or exported policy
+    pub policy: String,
+    /// the terrain, task and physics (a trained policy brings its own
+    /// observation layout, action prior and physics)
+    pub experiment: crate::config::Experiment,
+    /// the experiment file, when the user gave one (a policy that observes
+    /// otherwise than it sets up is then an error)
+    pub config_path: Option<PathBuf>,
+    /// the robot
+    pub robot: Arc<RobotModel>,
+    /// one episode per seed, in this order
+    pub seeds: Vec<u64>,
+    /// phases each episode may run
+    pub phases: u32,
+    /// sample a trained policy's actions (seeded by the episode's seed)
+    pub stochastic: bool,
+    /// worker threads [default: all cores]
+    pub threads: Option<usize>,
+    /// no progress line per episode on standard error
+    pub quiet: bool,
+}
+
+/// The scene every episode of `request` runs in: its terrain, and its task
+/// and physics fitted to the policy.
+fn scene_of<'a>(registry: &'a Registry, request: &EvalRequest) -> Result<Scene<'a>> {
+    let experiment = &request.experiment;
+    let (mut task, mut physics) = (experiment.task.clone(), experiment.physics.clone());
+    let first_seed = request.seeds.first().copied().unwrap_or(DEFAULT_FIRST_SEED);
+    let policy = Policy::from_arg(
         registry,
-        spec: spec.clone(),
-        model: args.scene.robot()?,
+        &request.policy,
+        request.stochastic.then_some(first_seed),
+    )?;
+    policy.fit_scene(&mut task, &mut physics, request.config_path.as_deref())?;
+    task.max_phases = request.phases as usize;
+    Ok(Scene {
+        registry,
+        spec: experiment.terrain.clone(),
+        model: request.robot.clone(),
         task,
         physics,
-    };
-    let out_dir = args
-        .out
-        .clone()
-        .unwrap_or_else(|| default_out_dir(&args.policy, &spec.to_string(), args.seed));
-    std::fs::create_dir_all(&out_dir)
-        .with_context(|| format!("--out {}: cannot create the directory", out_dir.display()))?;
-    let threads = args.threads.map_or_else(
-        || std::thread::available_parallelism().map_or(1, |n| n.get()),
-        |n| n as usize,
-    );
-    let seeds: Vec<u64> = (0..args.episodes as u64)
-        .map(|k| args.seed.wrapping_add(k))
-        .collect();
+    })
+}
 
+/// Runs the episode of `seed` again (the same episode as in
+/// [`evaluate`]), drawn into `video`'s file.
+pub fn record_episode(
+    registry: &Registry,
+    request: &EvalRequest,
+    seed: u64,
+    video: &VideoArgs,
+) -> Result<Option<VideoSummary>> {
+    let label = format!("{} (seed {seed})", request.policy);
+    let Some(mut recorder) = video.recorder(request.robot.clone(), &label)? else {
+        return Ok(None);
+    };
+    let scene = scene_of(registry, request)?;
+    let mut policy = Policy::from_arg(
+        registry,
+        &request.policy,
+        request.stochastic.then_some(seed),
+    )?;
+    run_episode(&mut policy, &scene, seed, Some(&mut recorder))?;
+    recorder.finish().map(Some)
+}
+
+/// Runs every episode of `request` in parallel: the same episodes as
+/// `quadwalk rollout` with each seed.
+pub fn evaluate(registry: &Registry, request: &EvalRequest) -> Result<EvalReport> {
+    let first_seed = request.seeds.first().copied().unwrap_or(DEFAULT_FIRST_SEED);
+    let sample = |seed: u64| request.stochastic.then_some(seed);
+    let scene = scene_of(registry, request)?;
+    let spec = scene.spec.clone();
+    let threads = request
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .context("cannot start the worker threads")?;
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let total = seeds.len();
-    let quiet = args.json;
+    let total = request.seeds.len();
     let results: Vec<Result<EpisodeRecord>> = pool.install(|| {
-        seeds
+        request
+            .seeds
             .par_iter()
             .map_init(
                 // one mean-action policy per worker; a sampling policy is
                 // loaded per episode, its generator seeded by the episode
-                || (!args.stochastic).then(|| Policy::from_arg(registry, &args.policy, None)),
+                || (!request.stochastic).then(|| Policy::from_arg(registry, &request.policy, None)),
                 |shared, &seed| {
                     let mut own;
                     let policy = match shared {
                         Some(loaded) => loaded.as_mut().map_err(|e| anyhow!("{e:#}"))?,
                         None => {
-                            own = Policy::from_arg(registry, &args.policy, sample(seed))?;
+                            own = Policy::from_arg(registry, &request.policy, sample(seed))?;
                             &mut own
                         }
                     };
-                    let record = run_episode(policy, &scene, seed)
+                    let record = run_episode(policy, &scene, seed, None)
                         .with_context(|| format!("episode with seed {seed}"))?;
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    if !quiet {
+                    if !request.quiet {
                         eprintln!(
                             "episode {n}/{total} (seed {seed}): {:.2} m in {} phases{}",
                             record.distance_m,
@@ -268,18 +327,58 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
     });
     let episodes = results.into_iter().collect::<Result<Vec<_>>>()?;
     let summary = Summary::of(&episodes, phase_secs());
-    let report = EvalReport {
+    Ok(EvalReport {
         format: REPORT_FORMAT.to_string(),
-        policy: args.policy.clone(),
+        policy: request.policy.clone(),
         terrain: spec.to_string(),
-        first_seed: args.seed,
-        max_phases: args.phases as usize,
-        stochastic: args.stochastic,
+        first_seed,
+        max_phases: request.phases as usize,
+        stochastic: request.stochastic,
         summary,
         episodes,
+    })
+}
+
+/// `quadwalk eval`.
+pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
+    if !args.compare.is_empty() {
+        return compare::compare(&args.compare, args.out.as_deref(), args.json);
+    }
+    args.video.check()?;
+    let experiment = args.scene.experiment(registry)?;
+    let out_dir = args.out.clone().unwrap_or_else(|| {
+        default_out_dir(&args.policy, &experiment.terrain.to_string(), args.seed)
+    });
+    let request = EvalRequest {
+        policy: args.policy.clone(),
+        experiment,
+        config_path: args.scene.config_path().map(Path::to_path_buf),
+        robot: args.scene.robot()?,
+        seeds: (0..args.episodes as u64)
+            .map(|k| args.seed.wrapping_add(k))
+            .collect(),
+        phases: args.phases,
+        stochastic: args.stochastic,
+        threads: args.threads.map(|n| n as usize),
+        quiet: args.json,
     };
+    // the policy and its fit to the scene are checked before the output
+    // directory is made
+    let (mut task, mut physics) = (
+        request.experiment.task.clone(),
+        request.experiment.physics.clone(),
+    );
+    Policy::from_arg(registry, &args.policy, args.stochastic.then_some(args.seed))?.fit_scene(
+        &mut task,
+        &mut physics,
+        request.config_path.as_deref(),
+    )?;
+    std::fs::create_dir_all(&out_dir)
+        .with_context(|| format!("--out {}: cannot create the directory", out_dir.display()))?;
+    let report = evaluate(registry, &request)?;
     write_outputs(&report, &out_dir)?;
-    log_to_rerun(&report, &args.rerun, &scene.model)?;
+    log_to_rerun(&report, &args.rerun, &request.robot)?;
+    let video = record_episode(registry, &request, args.seed, &args.video)?;
     if args.json {
         let mut value = serde_json::to_value(&report)?;
         if let Some(episodes) = value.get_mut("episodes").and_then(|e| e.as_array_mut()) {
@@ -290,9 +389,26 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
             }
         }
         value["out"] = serde_json::json!(out_dir.display().to_string());
+        if let Some(v) = &video {
+            value["video"] = serde_json::json!({
+                "path": v.path.display().to_string(),
+                "frames": v.frames,
+                "steps_per_frame": v.steps_per_frame,
+                "seed": args.seed,
+            });
+        }
         out!("{value}");
     } else {
         print_report(&report, &out_dir)?;
+        if let Some(v) = &video {
+            out!(
+                "video           {} (the episode of seed {}: {} frames, one every {} physics steps)",
+                v.path.display(),
+                args.seed,
+                v.frames,
+                v.steps_per_frame
+            );
+        }
     }
     Ok(())
 }
@@ -308,7 +424,8 @@ fn table_columns(summary: &Summary) -> Vec<&summary::TerrainSummary> {
     }
 }
 
-fn write_outputs(report: &EvalReport, dir: &Path) -> Result<()> {
+/// Writes `eval.json`, `table1.md` and the figures of `report` into `dir`.
+pub(crate) fn write_outputs(report: &EvalReport, dir: &Path) -> Result<()> {
     let path = dir.join(REPORT_FILE);
     std::fs::write(&path, serde_json::to_string_pretty(report)?)
         .with_context(|| format!("cannot write {}", path.display()))?;
@@ -460,6 +577,12 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
         s.phases.mean,
         s.goals_reached.mean,
         s.mean_torque_n_m.mean
+    );
+    out!(
+        "energy          cost of transport {} (joints' mechanical energy / (m g distance)); foot slip mean {:.2} cm per phase",
+        s.cost_of_transport
+            .map_or("- (no distance walked)".to_string(), |c| format!("{c:.2}")),
+        100.0 * s.foot_slip_m_per_phase.mean
     );
     let falls = if s.falls_by_cause.is_empty() {
         "none".to_string()

@@ -22,7 +22,8 @@ pub const FIGURE_FILES: [&str; 3] = [
     "landing_height.png",
 ];
 
-const FONT: &str = "sans-serif";
+/// The family name the built-in font is registered under.
+pub(crate) const FONT: &str = "sans-serif";
 static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 const COLOURS: [RGBColor; 8] = [
@@ -36,7 +37,8 @@ const COLOURS: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
-fn register_font() -> Result<()> {
+/// Registers the built-in font (once) for text drawn with plotters.
+pub(crate) fn register_font() -> Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok()
@@ -306,6 +308,47 @@ pub fn landing_height_per_foot(path: &Path, title: &str, types: &[&TerrainSummar
                 .map_err(plot_error)?
                 .label(t.terrain.clone())
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+        }
+        draw_legend(&mut chart)
+    })
+}
+
+/// One line of [`curves`].
+pub struct Curve {
+    /// its legend entry
+    pub label: String,
+    /// its colour (lines of one index share a colour)
+    pub colour_index: usize,
+    /// (x, y) in order of x
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Lines over a shared x axis (learning curves), one legend entry each.
+pub fn curves(path: &Path, title: &str, x_desc: &str, y_desc: &str, lines: &[Curve]) -> Result<()> {
+    render(path, |root| {
+        let all = || lines.iter().flat_map(|c| c.points.iter());
+        let (x0, x1) = padded_range(all().map(|p| p.0));
+        let (y0, y1) = padded_range(all().map(|p| p.1));
+        let mut chart = new_chart(root, title, x0..x1, y0..y1)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .label_style((FONT, 15))
+            .draw()
+            .map_err(plot_error)?;
+        for line in lines {
+            let colour = COLOURS[line.colour_index % COLOURS.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    line.points.iter().copied(),
+                    colour.stroke_width(2),
+                ))
+                .map_err(plot_error)?
+                .label(line.label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                });
         }
         draw_legend(&mut chart)
     })

@@ -18,6 +18,17 @@
 //! - The terrain type of a phase: the label of the terrain region under the
 //!   base at the phase's start (`elastic:2cm`, `rigid`); on `varying`
 //!   terrain that is the region's surface.
+//! - The joints' mechanical energy: the sum over physics steps of
+//!   sum_j |tau_j q_dot_j| dt, the PD torque applied in the step times the
+//!   joint velocity after it (motors do not recover energy, so negative
+//!   work costs as much as positive).
+//! - The cost of transport: that energy over m g d, m the robot's mass and
+//!   d the distance walked along x (dimensionless; none unless d > 0).
+//! - Foot slip: the horizontal speed of each foot's sole (the lowest point
+//!   of its sphere, `World::foot_sole_velocities_m_per_s`) times dt, over
+//!   the physics steps in which the foot touches the ground
+//!   (`World::feet_touching_ground`), summed over the feet: how far the feet
+//!   slide, not how far a rolling foot's centre moves.
 
 use std::collections::BTreeMap;
 
@@ -243,6 +254,19 @@ pub struct EpisodeRecord {
     pub fall: Option<Fall>,
     /// mean over physics steps of the joint torques' norm (tau_ave), N m
     pub mean_torque_n_m: f64,
+    /// the joints' mechanical energy, J (absent in files written before
+    /// 2026-12-02)
+    #[serde(default)]
+    pub mechanical_energy_j: f64,
+    /// mechanical energy / (m g distance); `None` unless it walked forward
+    #[serde(default)]
+    pub cost_of_transport: Option<f64>,
+    /// horizontal travel of the feet while touching the ground, m
+    #[serde(default)]
+    pub foot_slip_m: f64,
+    /// the robot's weight m g, N
+    #[serde(default)]
+    pub robot_weight_n: f64,
     /// the episode's return
     pub reward_total: f64,
     /// every phase
@@ -269,6 +293,10 @@ pub struct EpisodeRecorder {
     torque_norm: Accumulator,
     current: Option<(LegName, String, f64)>,
     fall: Option<Fall>,
+    mechanical_energy_j: f64,
+    foot_slip_m: f64,
+    /// the robot's mass, kg (read in the first step)
+    mass_kg: f64,
 }
 
 impl EpisodeRecorder {
@@ -293,6 +321,7 @@ impl EpisodeRecorder {
     ) -> EpisodeRecord {
         let distance_m = end_xy_m[0] - start_xy_m[0];
         let phases = self.phase_log.len();
+        let weight_n = self.mass_kg * terrain_plugins::STANDARD_GRAVITY_M_PER_S2;
         EpisodeRecord {
             seed,
             start_xy_m,
@@ -307,6 +336,11 @@ impl EpisodeRecorder {
             goals_reached,
             fall: self.fall,
             mean_torque_n_m: self.torque_norm.mean().unwrap_or(0.0),
+            mechanical_energy_j: self.mechanical_energy_j,
+            cost_of_transport: (distance_m > 0.0 && weight_n > 0.0)
+                .then(|| self.mechanical_energy_j / (weight_n * distance_m)),
+            foot_slip_m: self.foot_slip_m,
+            robot_weight_n: weight_n,
             reward_total,
             phase_log: self.phase_log,
             by_terrain: self.by_terrain,
@@ -337,9 +371,28 @@ impl PhaseObserver for EpisodeRecorder {
         let Some((swing, label, _)) = &self.current else {
             return;
         };
-        let torques = task.world().applied_torques_n_m();
+        let world = task.world();
+        let torques = world.applied_torques_n_m();
         self.torque_norm
             .add(torques.iter().map(|t| t * t).sum::<f64>().sqrt());
+        let power_w: f64 = torques
+            .iter()
+            .zip(world.joint_velocities_rad_per_s())
+            .map(|(tau, qd)| (tau * qd).abs())
+            .sum();
+        self.mechanical_energy_j += power_w * robot::DT_SECS;
+        if self.mass_kg == 0.0 {
+            self.mass_kg = world.model().total_mass_kg();
+        }
+        let touching = world.feet_touching_ground();
+        for (sole, _) in world
+            .foot_sole_velocities_m_per_s()
+            .iter()
+            .zip(touching)
+            .filter(|(_, touches)| *touches)
+        {
+            self.foot_slip_m += sole.x.hypot(sole.y) * robot::DT_SECS;
+        }
         if let Some(samples) = self.by_terrain.get_mut(label) {
             samples.add_step(
                 *swing,

@@ -45,6 +45,11 @@ pub struct Spread {
 }
 
 impl Spread {
+    /// All zero (no values).
+    pub fn zero() -> Self {
+        Self::of(&[])
+    }
+
     /// Of `values` (all zero when empty).
     pub fn of(values: &[f64]) -> Self {
         let at = |p| percentile(values, p).unwrap_or(0.0);
@@ -173,6 +178,16 @@ pub struct Summary {
     pub goals_reached: Spread,
     /// mean joint torque norm per episode, N m
     pub mean_torque_n_m: Spread,
+    /// cost of transport, every episode pooled: the joints' mechanical
+    /// energy summed over the episodes over m g times their summed distance
+    /// (`None` unless they walked forward together); absent in files written
+    /// before 2026-12-02
+    #[serde(default)]
+    pub cost_of_transport: Option<f64>,
+    /// foot slip per phase, per episode (horizontal foot travel while
+    /// touching the ground over the phases run), m
+    #[serde(default = "Spread::zero")]
+    pub foot_slip_m_per_phase: Spread,
     /// falls by cause
     pub falls_by_cause: BTreeMap<String, usize>,
     /// non-foot contacts that ended an episode, by link
@@ -242,6 +257,8 @@ impl Summary {
             phases: column(&|e| e.phases as f64),
             goals_reached: column(&|e| e.goals_reached as f64),
             mean_torque_n_m: column(&|e| e.mean_torque_n_m),
+            cost_of_transport: pooled_cost_of_transport(episodes),
+            foot_slip_m_per_phase: column(&|e| e.foot_slip_m / e.phases.max(1) as f64),
             falls_by_cause,
             falls_by_link,
             falls_at_terrain_end,
@@ -257,6 +274,16 @@ impl Summary {
             .iter()
             .filter(|t| t.terrain != ALL_TERRAIN)
     }
+}
+
+/// The cost of transport of `episodes` together: their mechanical energy
+/// over m g times their distance; `None` unless they walked forward
+/// together.
+fn pooled_cost_of_transport(episodes: &[EpisodeRecord]) -> Option<f64> {
+    let energy_j: f64 = episodes.iter().map(|e| e.mechanical_energy_j).sum();
+    let distance_m: f64 = episodes.iter().map(|e| e.distance_m).sum();
+    let weight_n = episodes.first()?.robot_weight_n;
+    (distance_m > 0.0 && weight_n > 0.0).then(|| energy_j / (weight_n * distance_m))
 }
 
 /// Bins per degree of the phase angle (for plots and axes).
@@ -320,6 +347,10 @@ mod tests {
             goals_reached: 0,
             fall,
             mean_torque_n_m: 10.0,
+            mechanical_energy_j: 0.0,
+            cost_of_transport: None,
+            foot_slip_m: 0.0,
+            robot_weight_n: 0.0,
             reward_total: 0.0,
             phase_log: terrains
                 .iter()

@@ -21,7 +21,7 @@
 //! | base linear velocity | 3 | m/s | base |
 //! | base angular velocity | 3 | rad/s | base |
 //! | pitch | 1 | rad | world (Euler) |
-//! | foot positions at the start of the three previous phases (oldest first) and now, FR FL RR RL x y z each (switch `foot_history`: off keeps only "now", 12) | 48 | m | base |
+//! | foot positions at the start of the three previous phases (oldest first) and now, FR FL RR RL x y z each (switch `foot_history`: off keeps only "now", 12; `foot_history_phases` = 1 or 2 keeps that many newest phase starts) | 48 | m | base |
 //! | foot positions 1 and 2 physics steps ago (4.2 and 8.3 ms; switch `short_history`) | 24 | m | base |
 //! | foot velocities, (p_now - p_prev_step) / dt (switch `foot_velocity`) | 12 | m/s | base |
 //! | goal azimuth phi_g = atan2(goal y, goal x) | 1 | rad | base |
@@ -116,7 +116,7 @@ mod reward;
 mod termination;
 
 pub use config::{ActionPrior, BalanceTerms, DistanceReward, TaskConfig};
-pub use observation::ObservationConfig;
+pub use observation::{FOOT_HISTORY_PHASES, ObservationConfig};
 pub use reward::RewardTerms;
 pub use termination::Termination;
 
@@ -727,8 +727,18 @@ mod tests {
             .size(),
             90
         );
+        // one phase shorter: the two newest phase starts (24 values)
+        assert_eq!(
+            ObservationConfig {
+                foot_history_phases: 2,
+                ..full
+            }
+            .size(),
+            90
+        );
         let none = ObservationConfig {
             foot_history: false,
+            foot_history_phases: 3,
             short_history: false,
             foot_velocity: false,
             goal_line_ahead_m: None,
@@ -805,6 +815,41 @@ mod tests {
         ]
         .concat();
         assert!(velocity.iter().all(|v| *v == 0.0));
+    }
+
+    #[test]
+    fn a_history_one_phase_shorter_keeps_the_two_newest_phase_starts() {
+        let shorter = TaskConfig {
+            observation: ObservationConfig {
+                foot_history_phases: 2,
+                ..ObservationConfig::default()
+            },
+            ..TaskConfig::default()
+        };
+        let mut full = task_on("rigid", TaskConfig::default(), 5);
+        let mut short = task_on("rigid", shorter, 5);
+        let (mut obs_f, mut obs_s) = (vec![0.0; 102], vec![0.0; 90]);
+        full.reset(&mut obs_f);
+        short.reset(&mut obs_s);
+        // the same actions on the same world: three phase starts apart
+        let action = [0.1f32; ACTION_SIZE];
+        for _ in 0..3 {
+            full.step_phase(&action, &mut obs_f);
+            short.step_phase(&action, &mut obs_s);
+        }
+        let history_f = block(&full, &obs_f, "feet_at_previous_phase_starts");
+        let history_s = block(&short, &obs_s, "feet_at_previous_phase_starts");
+        assert_eq!(history_f.len(), 36);
+        assert_eq!(history_s, &history_f[12..]);
+        assert_ne!(
+            &history_f[..12],
+            &history_f[24..],
+            "the phase starts differ"
+        );
+        assert_eq!(
+            block(&full, &obs_f, "feet_now"),
+            block(&short, &obs_s, "feet_now")
+        );
     }
 
     #[test]

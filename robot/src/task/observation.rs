@@ -6,12 +6,18 @@ use nalgebra::Vector3;
 use super::{ActionPrior, Task};
 use crate::world::DT_SECS;
 
+/// The previous phases whose start foot positions the paper observes.
+pub const FOOT_HISTORY_PHASES: usize = 3;
+
 /// Which optional observation blocks are on (the paper's ablations), and
 /// which point the goal blocks show.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ObservationConfig {
-    /// foot positions at the start of the three previous phases (36 values)
+    /// foot positions at the start of previous phases (12 values each)
     pub foot_history: bool,
+    /// how many previous phases' starts `foot_history` shows, newest last:
+    /// the paper's 3 (36 values), or 1-2 for its "one less phase" ablation
+    pub foot_history_phases: usize,
     /// foot positions 4 and 8 ms ago (24 values)
     pub short_history: bool,
     /// foot velocities (12 values)
@@ -28,6 +34,7 @@ impl Default for ObservationConfig {
     fn default() -> Self {
         Self {
             foot_history: true,
+            foot_history_phases: FOOT_HISTORY_PHASES,
             short_history: true,
             foot_velocity: true,
             goal_line_ahead_m: None,
@@ -46,7 +53,10 @@ impl ObservationConfig {
             ("pitch", 1),
         ];
         if self.foot_history {
-            sizes.push(("feet_at_previous_phase_starts", 36));
+            sizes.push((
+                "feet_at_previous_phase_starts",
+                12 * self.foot_history_phases,
+            ));
         }
         sizes.push(("feet_now", 12));
         if self.short_history {
@@ -90,7 +100,9 @@ impl Task {
         let now = self.feet_in_base();
         let c = &self.config.observation;
         if c.foot_history {
-            for feet in &self.episode.phase_start_feet {
+            let history = &self.episode.phase_start_feet;
+            let shown = c.foot_history_phases.min(history.len());
+            for feet in &history[history.len() - shown..] {
                 out.extend(feet.iter().flat_map(|f| f.iter().copied()));
             }
         }

@@ -1,0 +1,132 @@
+//! The observation ablations: each variant's trained policies (one per
+//! training seed) evaluated on unseen episodes, and their learning curves
+//! side by side.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+
+use crate::eval::EvalReport;
+use crate::eval::plots::{self, Curve};
+
+/// One trained policy of a variant and its evaluation.
+pub struct Run<'a> {
+    /// the variant
+    pub variant: &'a str,
+    /// the training seed
+    pub seed: u64,
+    /// the policy path
+    pub policy: &'a str,
+    /// its evaluation
+    pub report: &'a EvalReport,
+}
+
+/// The success and distance per variant and seed, one row each.
+pub fn markdown(runs: &[Run]) -> String {
+    let mut out = String::from(
+        "| variant | training seed | policy | terrain | success | distance, m (mean; min-max) | phases survived (mean) | falls by cause |\n| --- | ---: | --- | --- | ---: | --- | ---: | --- |\n",
+    );
+    for r in runs {
+        let s = &r.report.summary;
+        let falls = if s.falls_by_cause.is_empty() {
+            "none".to_string()
+        } else {
+            s.falls_by_cause
+                .iter()
+                .map(|(c, n)| format!("{c} {n}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | `{}` | {}/{} | {:.2} ({:.2}-{:.2}) | {:.1} | {falls} |",
+            r.variant,
+            r.seed,
+            r.policy,
+            r.report.terrain,
+            s.successes,
+            s.episodes,
+            s.distance_m.mean,
+            s.distance_m.min,
+            s.distance_m.max,
+            s.phases.mean
+        );
+    }
+    out
+}
+
+/// The `metrics.jsonl` of a policy: beside an exported policy, or in the
+/// run directory of a checkpoint.
+pub fn metrics_file(policy: &str) -> Result<PathBuf> {
+    let path = Path::new(policy);
+    let candidates = [
+        path.join(crate::train::METRICS_FILE),
+        path.parent()
+            .map_or_else(PathBuf::new, |p| p.join(crate::train::METRICS_FILE)),
+    ];
+    candidates
+        .into_iter()
+        .find(|p| p.is_file())
+        .with_context(|| {
+            format!(
+                "policy {policy}: no {} beside it or in its run directory",
+                crate::train::METRICS_FILE
+            )
+        })
+}
+
+/// The mean training-episode distance per iteration of a run's
+/// `metrics.jsonl`.
+pub fn distance_curve(path: &Path) -> Result<Vec<(f64, f64)>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut points = Vec::new();
+    for (k, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let value: serde_json::Value = serde_json::from_str(line)
+            .with_context(|| format!("{}:{}: not JSON", path.display(), k + 1))?;
+        let (Some(iteration), Some(distance)) = (
+            value.get("iteration").and_then(|v| v.as_f64()),
+            value.get("mean_distance_m").and_then(|v| v.as_f64()),
+        ) else {
+            bail!(
+                "{}:{}: no iteration or mean_distance_m",
+                path.display(),
+                k + 1
+            );
+        };
+        points.push((iteration, distance));
+    }
+    Ok(points)
+}
+
+/// The learning curves of every run, one colour per variant, drawn to
+/// `path`.
+pub fn curves_png(path: &Path, runs: &[Run]) -> Result<()> {
+    let mut variants: Vec<&str> = Vec::new();
+    for r in runs {
+        if !variants.contains(&r.variant) {
+            variants.push(r.variant);
+        }
+    }
+    let mut curves = Vec::new();
+    for r in runs {
+        let points = distance_curve(&metrics_file(r.policy)?)?;
+        curves.push(Curve {
+            label: format!("{} (seed {})", r.variant, r.seed),
+            colour_index: variants.iter().position(|v| *v == r.variant).unwrap_or(0),
+            points,
+        });
+    }
+    plots::curves(
+        path,
+        "observation ablations: training episodes' mean distance",
+        "iteration",
+        "mean distance per training episode (m)",
+        &curves,
+    )
+}

@@ -1,0 +1,91 @@
+//! Every policy on every terrain: success, distance, speed, cost of
+//! transport, foot slip and falls by cause per cell.
+
+use std::fmt::Write as _;
+
+use crate::eval::EvalReport;
+
+/// One cell: a policy's evaluation on a terrain, with the commands that
+/// ran it.
+pub struct Cell<'a> {
+    /// the policy path
+    pub policy: &'a str,
+    /// the terrain spec
+    pub terrain: &'a str,
+    /// its evaluation (every seed set)
+    pub report: &'a EvalReport,
+    /// the `quadwalk eval` commands, one per seed set
+    pub commands: Vec<String>,
+}
+
+fn falls(report: &EvalReport) -> String {
+    let s = &report.summary;
+    if s.falls_by_cause.is_empty() {
+        "none".into()
+    } else {
+        s.falls_by_cause
+            .iter()
+            .map(|(c, n)| format!("{c} {n}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// The success grid (policies down, terrains across), then one row per
+/// cell with every measure and its commands.
+pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> String {
+    let find = |p: &str, t: &str| cells.iter().find(|c| c.policy == p && c.terrain == t);
+    let mut out = String::from(
+        "Episodes that ran every phase without a fall, of those run (all seed sets together):\n\n| policy |",
+    );
+    for t in terrains {
+        let _ = write!(out, " `{t}` |");
+    }
+    out.push_str("\n| --- |");
+    out.push_str(&" ---: |".repeat(terrains.len()));
+    out.push('\n');
+    for p in policies {
+        let _ = write!(out, "| {p} |");
+        for t in terrains {
+            let text = find(p, t).map_or("-".into(), |c| {
+                format!(
+                    "{}/{}",
+                    c.report.summary.successes, c.report.summary.episodes
+                )
+            });
+            let _ = write!(out, " {text} |");
+        }
+        out.push('\n');
+    }
+    out.push_str(
+        "\nPer cell: speed is the distance along x over the simulated time, per episode (mean); the cost of transport is the joints' mechanical energy (the sum over steps of |tau q_dot| dt) over m g times the distance, all episodes pooled; foot slip is the horizontal travel of the feet while they touch the ground, per phase (mean over episodes).\n\n| policy | terrain | success | distance, m (mean; min-max) | speed, m/s | cost of transport | foot slip, cm/phase | falls by cause |\n| --- | --- | ---: | --- | ---: | ---: | ---: | --- |\n",
+    );
+    for p in policies {
+        for t in terrains {
+            let Some(c) = find(p, t) else { continue };
+            let s = &c.report.summary;
+            let _ = writeln!(
+                out,
+                "| {p} | `{t}` | {}/{} | {:.2} ({:.2}-{:.2}) | {:.3} | {} | {:.2} | {} |",
+                s.successes,
+                s.episodes,
+                s.distance_m.mean,
+                s.distance_m.min,
+                s.distance_m.max,
+                s.mean_speed_m_per_s.mean,
+                s.cost_of_transport
+                    .map_or("-".into(), |v| format!("{v:.2}")),
+                100.0 * s.foot_slip_m_per_phase.mean,
+                falls(c.report)
+            );
+        }
+    }
+    out.push_str("\nThe commands of each cell (one `quadwalk eval` per seed set):\n\n```sh\n");
+    for c in cells {
+        for command in &c.commands {
+            let _ = writeln!(out, "{command}");
+        }
+    }
+    out.push_str("```\n");
+    out
+}

@@ -1,0 +1,268 @@
+//! The plan of `quadwalk results` (`docs/results/plan.toml`): which policies
+//! are evaluated on which terrains, with how many episodes and seeds.
+//!
+//! ```toml
+//! [evaluation]
+//! episodes = 10                            # per seed set
+//! phases = 400                             # per episode (0.75 s each)
+//! seed_sets = [1000000, 5000000, 9000000]  # set k runs seeds s_k .. s_k + episodes - 1
+//!
+//! [scenarios]                              # Table I and Fig. 4: each on its own terrain
+//! tv2 = "policies/tv2"
+//! tv8 = "policies/tv8"
+//! tc2 = "policies/tc2"
+//! tc5 = "policies/tc5"
+//!
+//! [matrix]                                 # every policy on every terrain
+//! policies = ["policies/rigid", "policies/tv2"]
+//! terrains = ["rigid", "elastic:5cm", "rigid:friction=0.4"]
+//! seed_sets = [1000000]                    # optional: fewer sets for its many cells
+//!
+//! [[ablation]]                             # one trained policy per variant and seed
+//! variant = "full observation"
+//! seed = 0
+//! policy = "policies/elastic-5cm"
+//! terrain = "elastic:5cm"
+//! ```
+//!
+//! Policy paths are relative to the directory `quadwalk results` runs in
+//! (the repository's root for the shipped plan). Every table is optional;
+//! a plan needs at least one.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use serde::Deserialize;
+use terrain_plugins::Registry;
+
+/// The whole plan.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plan {
+    /// how every evaluation runs
+    pub evaluation: EvaluationPlan,
+    /// the paper's four training scenarios (Table I, Fig. 4)
+    pub scenarios: Option<Scenarios>,
+    /// policies by terrains
+    pub matrix: Option<MatrixPlan>,
+    /// the observation ablations, one entry per trained policy
+    #[serde(default)]
+    pub ablation: Vec<AblationRun>,
+}
+
+/// `[evaluation]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EvaluationPlan {
+    /// episodes per seed set
+    pub episodes: u32,
+    /// phases per episode
+    pub phases: u32,
+    /// the first seed of each set of `episodes` consecutive seeds
+    pub seed_sets: Vec<u64>,
+}
+
+/// `[scenarios]`: the policy trained on each of the paper's terrains.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenarios {
+    /// T_v2: stiffness drawn every 2 m
+    pub tv2: String,
+    /// T_v8: stiffness drawn every 8 m
+    pub tv8: String,
+    /// T_c^2: 2 cm tiles everywhere
+    pub tc2: String,
+    /// T_c^5: 5 cm tiles everywhere
+    pub tc5: String,
+}
+
+/// `[matrix]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MatrixPlan {
+    /// the rows
+    pub policies: Vec<String>,
+    /// the columns: terrain specs (`rigid:friction=0.4` is rigid ground
+    /// whose contacts have the friction coefficient 0.4)
+    pub terrains: Vec<String>,
+    /// the matrix's own seed sets, in place of `[evaluation]`'s (it has
+    /// many cells)
+    pub seed_sets: Option<Vec<u64>>,
+}
+
+/// `[[ablation]]`: one trained policy of an observation variant.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AblationRun {
+    /// the variant's name (`full observation`, `no foot-position history`)
+    pub variant: String,
+    /// the training seed
+    pub seed: u64,
+    /// the trained policy (an exported policy or a run directory); its
+    /// `metrics.jsonl` gives the learning curve
+    pub policy: String,
+    /// the terrain it is evaluated on
+    pub terrain: String,
+}
+
+impl Plan {
+    /// Reads and checks the plan at `path`: every spec parses with
+    /// `registry`, every count is positive, every policy path exists.
+    pub fn read(path: &Path, registry: &Registry) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("--plan {}: cannot read the plan", path.display()))?;
+        let plan: Self = toml::from_str(&text)
+            .with_context(|| format!("--plan {}: not a results plan", path.display()))?;
+        plan.check(registry)
+            .with_context(|| format!("--plan {}", path.display()))?;
+        Ok(plan)
+    }
+
+    fn check(&self, registry: &Registry) -> Result<()> {
+        let e = &self.evaluation;
+        if e.episodes == 0 {
+            bail!("evaluation.episodes = 0: must be at least 1");
+        }
+        if e.phases == 0 {
+            bail!("evaluation.phases = 0: must be at least 1");
+        }
+        let check_sets = |key: &str, sets: &[u64]| -> Result<()> {
+            if sets.is_empty() {
+                bail!("{key} is empty: give at least one first seed");
+            }
+            let mut sorted = sets.to_vec();
+            sorted.sort_unstable();
+            for pair in sorted.windows(2) {
+                if pair[1] - pair[0] < u64::from(e.episodes) {
+                    bail!(
+                        "{key} {} and {} overlap: each set runs {} consecutive seeds",
+                        pair[0],
+                        pair[1],
+                        e.episodes
+                    );
+                }
+            }
+            Ok(())
+        };
+        check_sets("evaluation.seed_sets", &e.seed_sets)?;
+        if let Some(sets) = self.matrix.as_ref().and_then(|m| m.seed_sets.as_ref()) {
+            check_sets("matrix.seed_sets", sets)?;
+        }
+        if self.scenarios.is_none() && self.matrix.is_none() && self.ablation.is_empty() {
+            bail!("the plan has no [scenarios], [matrix] or [[ablation]]: nothing to evaluate");
+        }
+        let policy = |key: &str, p: &str| -> Result<()> {
+            if p != "scripted" && !Path::new(p).exists() {
+                bail!("{key} = {p:?}: no such policy (a path, or `scripted`)");
+            }
+            Ok(())
+        };
+        let spec = |key: &str, s: &str| -> Result<()> {
+            registry
+                .parse(s)
+                .map(|_| ())
+                .with_context(|| format!("{key} = {s:?}"))
+        };
+        if let Some(s) = &self.scenarios {
+            for (key, p) in [
+                ("scenarios.tv2", &s.tv2),
+                ("scenarios.tv8", &s.tv8),
+                ("scenarios.tc2", &s.tc2),
+                ("scenarios.tc5", &s.tc5),
+            ] {
+                policy(key, p)?;
+            }
+        }
+        if let Some(m) = &self.matrix {
+            if m.policies.is_empty() || m.terrains.is_empty() {
+                bail!("[matrix] needs at least one policy and one terrain");
+            }
+            for p in &m.policies {
+                policy("matrix.policies", p)?;
+            }
+            for t in &m.terrains {
+                spec("matrix.terrains", t)?;
+            }
+        }
+        for run in &self.ablation {
+            if run.variant.trim().is_empty() {
+                bail!(
+                    "[[ablation]] with policy {:?}: variant is empty",
+                    run.policy
+                );
+            }
+            policy("ablation.policy", &run.policy)?;
+            spec("ablation.terrain", &run.terrain)?;
+        }
+        Ok(())
+    }
+
+    /// The seeds of `sets`, set by set.
+    pub fn seeds_of(&self, sets: &[u64]) -> Vec<u64> {
+        sets.iter()
+            .flat_map(|&s| (0..u64::from(self.evaluation.episodes)).map(move |k| s + k))
+            .collect()
+    }
+
+    /// The seed sets of the matrix's cells.
+    pub fn matrix_seed_sets(&self) -> &[u64] {
+        self.matrix
+            .as_ref()
+            .and_then(|m| m.seed_sets.as_deref())
+            .unwrap_or(&self.evaluation.seed_sets)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Plan> {
+        let plan: Plan = toml::from_str(text)?;
+        plan.check(&Registry::builtin())?;
+        Ok(plan)
+    }
+
+    #[test]
+    fn a_plan_lists_its_seeds_set_by_set() {
+        let plan = parse(
+            "[evaluation]\nepisodes = 2\nphases = 3\nseed_sets = [10, 20]\n[matrix]\npolicies = [\"scripted\"]\nterrains = [\"rigid\", \"rigid:friction=0.4\"]\n",
+        )
+        .unwrap();
+        assert_eq!(plan.seeds_of(&plan.evaluation.seed_sets), [10, 11, 20, 21]);
+        assert_eq!(plan.matrix_seed_sets(), [10, 20]);
+        assert_eq!(plan.matrix.unwrap().terrains[1], "rigid:friction=0.4");
+        let own = parse(
+            "[evaluation]\nepisodes = 2\nphases = 3\nseed_sets = [10, 20]\n[matrix]\npolicies = [\"scripted\"]\nterrains = [\"rigid\"]\nseed_sets = [40]\n",
+        )
+        .unwrap();
+        assert_eq!(own.matrix_seed_sets(), [40]);
+        assert_eq!(own.seeds_of(own.matrix_seed_sets()), [40, 41]);
+    }
+
+    #[test]
+    fn bad_plans_name_the_setting() {
+        let base = "[evaluation]\nepisodes = 2\nphases = 3\n";
+        let err = |text: &str| format!("{:#}", parse(text).unwrap_err());
+        let matrix = "[matrix]\npolicies = [\"scripted\"]\nterrains = [\"rigid\"]\n";
+        assert!(
+            err(&format!("{base}seed_sets = [10, 11]\n{matrix}")).contains("overlap"),
+            "overlapping sets"
+        );
+        assert!(err(&format!("{base}seed_sets = []\n{matrix}")).contains("seed_sets is empty"));
+        assert!(
+            err(&format!("{base}seed_sets = [1]\n")).contains("nothing to evaluate"),
+            "no tables"
+        );
+        let e = err(&format!(
+            "{base}seed_sets = [1]\n[matrix]\npolicies = [\"no/such/policy\"]\nterrains = [\"rigid\"]\n"
+        ));
+        assert!(e.contains("no/such/policy"), "{e}");
+        let e = err(&format!(
+            "{base}seed_sets = [1]\n[matrix]\npolicies = [\"scripted\"]\nterrains = [\"marsh:5cm\"]\n"
+        ));
+        assert!(e.contains("marsh:5cm"), "{e}");
+        let e = err(&format!("{base}seed_sets = [1]\nepisodez = 3\n{matrix}"));
+        assert!(e.contains("episodez"), "unknown keys are refused: {e}");
+    }
+}

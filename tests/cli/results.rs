@@ -1,0 +1,140 @@
+//! `quadwalk results`: a tiny plan gives every page, the cache is reused
+//! and refreshed, and a bad plan is refused with its name.
+
+use std::path::Path;
+
+use super::train::{s, scratch_dir};
+use super::{failure, quadwalk};
+
+/// The size of a PNG file, read from its IHDR chunk.
+fn png_size(path: &Path) -> (u32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG", "{} is a PNG", path.display());
+    let be = |at: usize| u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+#[test]
+fn a_tiny_plan_writes_table_one_fig_four_the_matrix_and_the_ablations() {
+    let dir = scratch_dir("results-tiny");
+    let rigid_policy = Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies/rigid");
+    let rigid_policy = s(&rigid_policy);
+    let plan = dir.join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "[evaluation]\nepisodes = 1\nphases = 4\nseed_sets = [7, 9]\n\n[scenarios]\ntv2 = \"scripted\"\ntv8 = \"scripted\"\ntc2 = \"scripted\"\ntc5 = \"scripted\"\n\n[matrix]\npolicies = [\"scripted\", \"{rigid_policy}\"]\nterrains = [\"rigid\", \"rigid:friction=0.4\"]\n\n[[ablation]]\nvariant = \"full observation\"\nseed = 0\npolicy = \"{rigid_policy}\"\nterrain = \"rigid\"\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join("pages");
+    let cache = dir.join("cache");
+    let args = [
+        "results",
+        "--plan",
+        s(&plan),
+        "--out",
+        s(&out),
+        "--cache",
+        s(&cache),
+        "--threads",
+        "2",
+    ];
+    let run = quadwalk(&args);
+    let stderr = String::from_utf8_lossy(&run.stderr).to_string();
+    assert!(run.status.success(), "{stderr}");
+    // the crawl on the scenarios' four terrains and on the matrix's two,
+    // the policy on the two; the ablation's cell is the policy's on rigid
+    let evaluated = stderr.matches(" episodes x 4 phases").count();
+    assert_eq!(evaluated, 4 + 2 + 2, "{stderr}");
+
+    let table = std::fs::read_to_string(out.join("table1.md")).unwrap();
+    assert!(
+        table.contains(
+            "| cm, ours / paper | T_v2^ave | T_v2^2 | T_v2^5 | T_v8^2 | T_v8^5 | T_c^2 | T_c^5 |"
+        ),
+        "{table}"
+    );
+    for row in [
+        "sigma(h_b)",
+        "mu(h_b)",
+        "mu(fr)",
+        "mu(fl)",
+        "mu(rr)",
+        "mu(rl)",
+    ] {
+        assert!(table.contains(&format!("| {row} |")), "{row}: {table}");
+    }
+    assert!(table.contains(" / 33.1 |"), "the paper's T_v2^ave mu(h_b)");
+    assert!(table.contains("(a) The paper: T_c^2 and T_c^5"), "{table}");
+    assert!(
+        table.contains(
+            "quadwalk eval --policy scripted --terrain elastic:5cm --episodes 1 --phases 4 --seed 9"
+        ),
+        "each evaluation's command: {table}"
+    );
+    assert_eq!(png_size(&out.join("fig4.png")), (1024, 640));
+
+    let matrix = std::fs::read_to_string(out.join("matrix.md")).unwrap();
+    assert!(
+        matrix.contains("| scripted | `rigid:friction=0.4` | "),
+        "{matrix}"
+    );
+    assert!(matrix.contains(&format!("| {rigid_policy} |")), "{matrix}");
+    let ablations = std::fs::read_to_string(out.join("ablations.md")).unwrap();
+    assert!(
+        ablations.contains("| full observation | 0 |"),
+        "{ablations}"
+    );
+    assert_eq!(png_size(&out.join("ablation-curves.png")), (1024, 640));
+
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let cells = results.as_array().unwrap();
+    assert_eq!(cells.len(), 8);
+    for cell in cells {
+        assert_eq!(cell["summary"]["episodes"], 2, "two seed sets of one");
+        assert_eq!(cell["seeds"].as_array().unwrap().len(), 2);
+    }
+
+    // again: every evaluation comes from the cache, the pages are the same
+    let again = quadwalk(&args);
+    let stderr = String::from_utf8_lossy(&again.stderr).to_string();
+    assert!(again.status.success(), "{stderr}");
+    assert_eq!(stderr.matches(": from ").count(), 8, "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("table1.md")).unwrap(),
+        table
+    );
+    // --fresh runs them again, to the same figures
+    let mut fresh = args.to_vec();
+    fresh.push("--fresh");
+    let third = quadwalk(&fresh);
+    let stderr = String::from_utf8_lossy(&third.stderr).to_string();
+    assert!(third.status.success(), "{stderr}");
+    assert_eq!(stderr.matches(": from ").count(), 0, "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("matrix.md")).unwrap(),
+        matrix
+    );
+}
+
+#[test]
+fn a_bad_plan_is_refused_with_its_name_and_what_is_wrong() {
+    let dir = scratch_dir("results-bad");
+    let plan = dir.join("plan.toml");
+    std::fs::write(
+        &plan,
+        "[evaluation]\nepisodes = 1\nphases = 4\nseed_sets = [7]\n[matrix]\npolicies = [\"scripted\"]\nterrains = [\"marsh:5cm\"]\n",
+    )
+    .unwrap();
+    let err = failure(&["results", "--plan", s(&plan)], 1);
+    assert!(
+        err.contains("plan.toml") && err.contains("marsh:5cm"),
+        "{err}"
+    );
+    let missing = dir.join("no-such-plan.toml");
+    let err = failure(&["results", "--plan", s(&missing)], 1);
+    assert!(err.contains("no-such-plan.toml"), "{err}");
+    assert!(!dir.join("table1.md").exists(), "nothing written");
+}

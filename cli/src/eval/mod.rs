@@ -167,8 +167,8 @@ fn run_episode(
     ))
 }
 
-/// A file-name-safe form of a terrain spec.
-fn slug(spec: &str) -> String {
+/// A file-name-safe form of a terrain spec or a path.
+pub(crate) fn slug(spec: &str) -> String {
     spec.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
@@ -584,16 +584,7 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
             .map_or("- (no distance walked)".to_string(), |c| format!("{c:.2}")),
         100.0 * s.foot_slip_m_per_phase.mean
     );
-    let falls = if s.falls_by_cause.is_empty() {
-        "none".to_string()
-    } else {
-        s.falls_by_cause
-            .iter()
-            .map(|(c, n)| format!("{c} {n}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    out!("falls           {falls}");
+    out!("falls           {}", s.falls_text());
     if !s.falls_by_link.is_empty() {
         let links: Vec<_> = s
             .falls_by_link

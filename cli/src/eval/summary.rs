@@ -267,6 +267,19 @@ impl Summary {
         }
     }
 
+    /// The falls by cause as text (`base_too_low 2, non_foot_contact 1`,
+    /// or `none`).
+    pub fn falls_text(&self) -> String {
+        if self.falls_by_cause.is_empty() {
+            return "none".to_string();
+        }
+        self.falls_by_cause
+            .iter()
+            .map(|(c, n)| format!("{c} {n}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// The terrain types with samples, each by itself (without the pooled
     /// column).
     pub fn each_terrain_type(&self) -> impl Iterator<Item = &TerrainSummary> {

@@ -29,18 +29,9 @@ pub fn markdown(runs: &[Run]) -> String {
     );
     for r in runs {
         let s = &r.report.summary;
-        let falls = if s.falls_by_cause.is_empty() {
-            "none".to_string()
-        } else {
-            s.falls_by_cause
-                .iter()
-                .map(|(c, n)| format!("{c} {n}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
         let _ = writeln!(
             out,
-            "| {} | {} | {} | `{}` | {}/{} | {:.2} ({:.2}-{:.2}) | {:.1} | {falls} |",
+            "| {} | {} | {} | `{}` | {}/{} | {:.2} ({:.2}-{:.2}) | {:.1} | {} |",
             r.variant,
             r.seed,
             r.policy,
@@ -50,7 +41,8 @@ pub fn markdown(runs: &[Run]) -> String {
             s.distance_m.mean,
             s.distance_m.min,
             s.distance_m.max,
-            s.phases.mean
+            s.phases.mean,
+            s.falls_text()
         );
     }
     out

@@ -18,19 +18,6 @@ pub struct Cell<'a> {
     pub commands: Vec<String>,
 }
 
-fn falls(report: &EvalReport) -> String {
-    let s = &report.summary;
-    if s.falls_by_cause.is_empty() {
-        "none".into()
-    } else {
-        s.falls_by_cause
-            .iter()
-            .map(|(c, n)| format!("{c} {n}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    }
-}
-
 /// The success grid (policies down, terrains across), then one row per
 /// cell with every measure and its commands.
 pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> String {
@@ -76,7 +63,7 @@ pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> Str
                 s.cost_of_transport
                     .map_or("-".into(), |v| format!("{v:.2}")),
                 100.0 * s.foot_slip_m_per_phase.mean,
-                falls(c.report)
+                s.falls_text()
             );
         }
     }

@@ -28,7 +28,7 @@ use clap::Args;
 use serde::{Deserialize, Serialize};
 use terrain_plugins::Registry;
 
-use crate::eval::{self, EvalReport, EvalRequest};
+use crate::eval::{self, EvalReport, EvalRequest, slug};
 use plan::Plan;
 
 /// Arguments of `quadwalk results`.
@@ -80,19 +80,6 @@ fn fingerprint(policy: &str) -> Result<String> {
     };
     let bytes = std::fs::read(&file).with_context(|| format!("cannot read {}", file.display()))?;
     Ok(format!("{:016x}", learn::checkpoint::fnv1a64(&bytes)))
-}
-
-/// A file-name-safe form of a policy path or terrain spec.
-fn slug(text: &str) -> String {
-    text.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
 }
 
 /// The `quadwalk eval` command that runs seed set `seed` of a cell.

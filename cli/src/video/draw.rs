@@ -268,6 +268,18 @@ fn draw_target(area: &Area, view: &View, state: &FrameState) -> Result<()> {
     Ok(())
 }
 
+/// A tile between the pixel corners `corners`, coloured by its sink.
+fn draw_tile(area: &Area, corners: [(i32, i32); 2], sink_m: f64) -> Result<()> {
+    area.draw(&Rectangle::new(
+        corners,
+        rgb(viz::sink_colour(sink_m)).filled(),
+    ))
+    .map_err(plot_error)?;
+    area.draw(&Rectangle::new(corners, BLACK.mix(0.35)))
+        .map_err(plot_error)?;
+    Ok(())
+}
+
 fn draw_side(area: &Area, view: &View, state: &FrameState) -> Result<()> {
     // the ground along the base's y, filled below
     if state.ground_profile_m.len() >= 2 {
@@ -298,13 +310,7 @@ fn draw_side(area: &Area, view: &View, state: &FrameState) -> Result<()> {
             view.centre.y,
             top - 0.04,
         ));
-        area.draw(&Rectangle::new(
-            [a, b],
-            rgb(viz::sink_colour(tile.sink_m)).filled(),
-        ))
-        .map_err(plot_error)?;
-        area.draw(&Rectangle::new([a, b], BLACK.mix(0.35)))
-            .map_err(plot_error)?;
+        draw_tile(area, [a, b], tile.sink_m)?;
     }
     draw_path(area, view, state)?;
     draw_robot(area, view, state)?;
@@ -336,13 +342,7 @@ fn draw_top(area: &Area, view: &View, state: &FrameState) -> Result<()> {
             tile.center_m[1] - half,
             0.0,
         ));
-        area.draw(&Rectangle::new(
-            [a, b],
-            rgb(viz::sink_colour(tile.sink_m)).filled(),
-        ))
-        .map_err(plot_error)?;
-        area.draw(&Rectangle::new([a, b], BLACK.mix(0.35)))
-            .map_err(plot_error)?;
+        draw_tile(area, [a, b], tile.sink_m)?;
     }
     draw_path(area, view, state)?;
     draw_robot(area, view, state)?;

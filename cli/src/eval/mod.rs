@@ -251,10 +251,11 @@ fn scene_of<'a>(registry: &'a Registry, request: &EvalRequest) -> Result<Scene<'
     })
 }
 
-/// Runs the episode of `seed` again (the same episode as in
+/// Runs the episode of `seed` in `scene` again (the same episode as in
 /// [`evaluate`]), drawn into `video`'s file.
-pub fn record_episode(
+fn record_episode(
     registry: &Registry,
+    scene: &Scene,
     request: &EvalRequest,
     seed: u64,
     video: &VideoArgs,
@@ -263,22 +264,27 @@ pub fn record_episode(
     let Some(mut recorder) = video.recorder(request.robot.clone(), &label)? else {
         return Ok(None);
     };
-    let scene = scene_of(registry, request)?;
     let mut policy = Policy::from_arg(
         registry,
         &request.policy,
         request.stochastic.then_some(seed),
     )?;
-    run_episode(&mut policy, &scene, seed, Some(&mut recorder))?;
+    run_episode(&mut policy, scene, seed, Some(&mut recorder))?;
     recorder.finish().map(Some)
 }
 
 /// Runs every episode of `request` in parallel: the same episodes as
 /// `quadwalk rollout` with each seed.
 pub fn evaluate(registry: &Registry, request: &EvalRequest) -> Result<EvalReport> {
+    run_episodes(&scene_of(registry, request)?, request)
+}
+
+/// Runs every episode of `request` in `scene` (fitted to its policy by
+/// [`scene_of`]) in parallel.
+fn run_episodes(scene: &Scene, request: &EvalRequest) -> Result<EvalReport> {
+    let registry = scene.registry;
     let first_seed = request.seeds.first().copied().unwrap_or(DEFAULT_FIRST_SEED);
     let sample = |seed: u64| request.stochastic.then_some(seed);
-    let scene = scene_of(registry, request)?;
     let spec = scene.spec.clone();
     let threads = request
         .threads
@@ -306,7 +312,7 @@ pub fn evaluate(registry: &Registry, request: &EvalRequest) -> Result<EvalReport
                             &mut own
                         }
                     };
-                    let record = run_episode(policy, &scene, seed, None)
+                    let record = run_episode(policy, scene, seed, None)
                         .with_context(|| format!("episode with seed {seed}"))?;
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     if !request.quiet {
@@ -364,21 +370,13 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
     };
     // the policy and its fit to the scene are checked before the output
     // directory is made
-    let (mut task, mut physics) = (
-        request.experiment.task.clone(),
-        request.experiment.physics.clone(),
-    );
-    Policy::from_arg(registry, &args.policy, args.stochastic.then_some(args.seed))?.fit_scene(
-        &mut task,
-        &mut physics,
-        request.config_path.as_deref(),
-    )?;
+    let scene = scene_of(registry, &request)?;
     std::fs::create_dir_all(&out_dir)
         .with_context(|| format!("--out {}: cannot create the directory", out_dir.display()))?;
-    let report = evaluate(registry, &request)?;
+    let report = run_episodes(&scene, &request)?;
     write_outputs(&report, &out_dir)?;
     log_to_rerun(&report, &args.rerun, &request.robot)?;
-    let video = record_episode(registry, &request, args.seed, &args.video)?;
+    let video = record_episode(registry, &scene, &request, args.seed, &args.video)?;
     if args.json {
         let mut value = serde_json::to_value(&report)?;
         if let Some(episodes) = value.get_mut("episodes").and_then(|e| e.as_array_mut()) {

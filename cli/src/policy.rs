@@ -19,9 +19,9 @@ pub enum Policy {
         learner: Box<learn::Learner>,
         /// the task settings the policy was trained with (its observation
         /// layout and action prior)
-        task: TaskConfig,
+        task: Box<TaskConfig>,
         /// the physics it was trained in
-        physics: WorldConfig,
+        physics: Box<WorldConfig>,
         /// set: sample actions with this generator; unset: the mean action
         sampler: Option<Box<rand_chacha::ChaCha8Rng>>,
     },
@@ -78,8 +78,8 @@ impl Policy {
         }
         Ok(Self::Trained {
             learner: Box::new(learner),
-            task,
-            physics,
+            task: Box::new(task),
+            physics: Box::new(physics),
             sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),
         })
     }
@@ -120,7 +120,7 @@ impl Policy {
                 }
                 task_config.observation = task.observation;
                 task_config.action_prior = task.action_prior;
-                *physics = trained_in.clone();
+                *physics = (**trained_in).clone();
             }
             Self::Scripted(_) if task_config.action_prior != ActionPrior::None => bail!(
                 "--policy scripted runs the crawl itself; its config sets action_prior = {:?}, which adds the crawl to a trained policy's actions (use action_prior = \"none\")",

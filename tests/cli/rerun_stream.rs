@@ -584,3 +584,49 @@ fn eval_streams_its_curves() {
         assert!(timelines.contains(&timeline), "{timeline}: {timelines:?}");
     }
 }
+
+/// What a person sees: a recording opened in Rerun's web viewer, drawn by
+/// headless Chromium's software rasteriser (`scripts/viewer_screenshot.py`;
+/// CI installs Chromium, see `.ci/run`), has the robot in its 3D view from
+/// the start, large: the eye follows the base.
+#[test]
+fn the_web_viewer_shows_the_robot_in_its_3d_view() {
+    let rrd = scratch("viewer.rrd");
+    let png = scratch("viewer.png");
+    let policy = Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies/elastic-5cm");
+    quadwalk_ok(&[
+        "rollout",
+        "--policy",
+        policy.to_str().unwrap(),
+        "--terrain",
+        "elastic:5cm",
+        "--phases",
+        "8",
+        "--rerun",
+        &format!("save:{}", rrd.display()),
+    ]);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/viewer_screenshot.py");
+    let out = Command::new(rerun_venv().join("bin/python"))
+        .arg(&script)
+        .arg(&rrd)
+        .arg(&png)
+        .args(["--timeout", "400"])
+        .output()
+        .expect("python runs");
+    assert!(
+        out.status.success(),
+        "viewer_screenshot.py: {}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(png.with_extension("json")).unwrap()).unwrap();
+    assert_eq!(report["robot_in_view"], Value::Bool(true), "{report}");
+    // The eye 2 m from the base: the robot covers a few percent of the
+    // window (about 1 % at 1600x900), not the handful of pixels it covers
+    // when the view frames the whole terrain.
+    let percent = report["robot_percent"].as_f64().unwrap();
+    assert!(percent >= 0.5, "{report}");
+    let png_bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&png_bytes[..8], b"\x89PNG\r\n\x1a\n", "a PNG");
+}

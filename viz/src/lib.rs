@@ -11,6 +11,7 @@
 //! | entity path | archetype | when |
 //! | --- | --- | --- |
 //! | `world/robot/<link>` | `Transform3D` (pose of the link) | every logged frame |
+//! | `world/robot/<base>/eye_anchor` | `Points3D`: two points, 0.5 mm, at opposite corners of a box around the base, static; the 3D view's eye tracks them (see the blueprint below) | once |
 //! | `world/robot/<link>/shape_<k>` | `Boxes3D`, `Ellipsoids3D`, `Cylinders3D`, `Capsules3D` or `Mesh3D` (its collision shapes), static | once |
 //! | `world/base/trajectory` | `LineStrips3D`: the base path so far (a point per centimetre moved, then the current position) | every logged frame |
 //! | `world/goal` | `Points3D` | every logged frame of a task (`stand` has no goal) |
@@ -32,6 +33,10 @@
 //! | `eval/landing_height_cm/<terrain>` | `Scalars` on the `foot` timeline (0 FR, 1 FL, 2 RR, 3 RL) | end of `quadwalk eval` |
 //! | `train/<curve>` (mean return, distance, episode length, losses, entropy, KL, clip fraction, explained variance, phases/s) | `Scalars`, on the `iteration` timeline only | every training iteration |
 //!
+//! The blueprint (the viewer's layout): the 3D view of `world`, its eye
+//! following the base from about 2 m behind, right of and above it, beside
+//! the time series of the rewards, the base, the torques and training.
+//!
 //! Timelines: `sim_time` (seconds of simulated time), `phase` (the phase's
 //! index in its episode) and, when set, `iteration` (training).
 //!
@@ -41,6 +46,8 @@
 
 mod sink;
 
+#[cfg(feature = "rerun")]
+mod blueprint;
 #[cfg(not(feature = "rerun"))]
 mod disabled;
 #[cfg(feature = "rerun")]

@@ -307,34 +307,17 @@ impl RolloutLogger {
     }
 
     fn log_blueprint(&mut self) {
-        use rerun::blueprint::{Blueprint, Horizontal, Spatial3DView, TimeSeriesView, Vertical};
         let Some(rec) = &self.rec else { return };
-        let blueprint = Blueprint::new(Horizontal::new([
-            Spatial3DView::new("robot and terrain")
-                .with_origin("/world")
-                .into(),
-            Vertical::new([
-                TimeSeriesView::new("reward per term")
-                    .with_origin("/reward")
-                    .into(),
-                TimeSeriesView::new("base height, roll, pitch")
-                    .with_origin("/base")
-                    .into(),
-                TimeSeriesView::new("joint torques")
-                    .with_origin("/torque")
-                    .into(),
-                TimeSeriesView::new("training (per iteration)")
-                    .with_origin("/train")
-                    .into(),
-            ])
-            .into(),
-        ]));
-        let result = blueprint.send(rec, Default::default());
+        let result = crate::blueprint::send(rec, &self.body_paths[0]);
         self.check(result);
     }
 
     fn log_robot_shapes(&mut self, model: &RobotModel) {
         let Some(rec) = self.rec.clone() else { return };
+        let [x, y, z] = crate::blueprint::ANCHOR_HALF_EXTENTS_M;
+        let anchor = rerun::Points3D::new([[-x, -y, -z], [x, y, z]])
+            .with_radii([crate::blueprint::ANCHOR_RADIUS_M]);
+        self.check(rec.log_static(crate::blueprint::anchor_path(&self.body_paths[0]), &anchor));
         for (body, path) in model.bodies.iter().zip(self.body_paths.clone()) {
             for (k, shape) in body.collisions.iter().enumerate() {
                 let shape_path = format!("{path}/shape_{k}");

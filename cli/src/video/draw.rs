@@ -208,10 +208,14 @@ const SWING_LEG: RGBColor = RGBColor(235, 140, 20);
 const TARGET: RGBColor = RGBColor(200, 0, 0);
 const PATH: RGBColor = RGBColor(90, 90, 200);
 
+/// A shape as drawn: its mean depth along the view, its outline in pixels
+/// and its colour.
+type Silhouette = (f64, Vec<(i32, i32)>, RGBColor);
+
 /// The robot's shapes in `view`, far ones first.
 fn draw_robot(area: &Area, view: &View, state: &FrameState) -> Result<()> {
     let legs = body_legs(state.model);
-    let mut shapes: Vec<(f64, Vec<(i32, i32)>, RGBColor)> = Vec::new();
+    let mut shapes: Vec<Silhouette> = Vec::new();
     for (k, (body, pose)) in state.model.bodies.iter().zip(state.body_poses).enumerate() {
         for shape in &body.collisions {
             let shape_pose = pose * shape.shape_in_body;

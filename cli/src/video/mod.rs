@@ -282,7 +282,7 @@ impl PhaseObserver for VideoRecorder {
 
     fn stepped(&mut self, task: &Task, _step_in_phase: usize) {
         self.steps += 1;
-        if self.steps % self.steps_per_frame == 0 {
+        if self.steps.is_multiple_of(self.steps_per_frame) {
             self.frame(task);
         }
     }

@@ -7,9 +7,9 @@ Serves RECORDING with the `rerun` command of rerun-sdk 0.36.3 (the one
 beside this Python, else on PATH), opens Rerun's web viewer in headless
 Chromium (Debian's `chromium`; WebGL through its software rasteriser:
 `--use-angle=swiftshader --enable-unsafe-swiftshader`, viewer URL
-`renderer=webgl`), waits until the viewer has drawn the recording (two
-screenshots a few seconds apart alike, after the robot's colour first
-shows), and saves the screenshot to OUT.
+`renderer=webgl`), waits until the viewer has drawn the recording (5 s
+after the robot's colour first shows, two screenshots 3 s apart alike),
+and saves the screenshot to OUT.
 
 Then it checks that the robot is in the 3D view: it makes a copy of the
 recording without the robot's shapes (`rerun rrd filter --drop-entity`),
@@ -172,9 +172,14 @@ def screenshot(
     size: tuple[int, int],
     timeout_s: float,
     log_dir: Path,
-) -> None:
-    """Serves `recording`, opens it in headless Chromium, saves a screenshot
-    once the viewer has drawn it."""
+    shown_after_s: float | None = None,
+) -> float:
+    """Serves `recording`, opens it in headless Chromium and saves a
+    screenshot once the viewer has drawn it: 5 s after the data shows, when
+    two screenshots 3 s apart are alike. The data shows when the robot's
+    colour first does, or, for a recording without the robot, after
+    `shown_after_s` (what it took the recording with the robot). Returns
+    the seconds the data took to show."""
     from PIL import Image, ImageChops
 
     web_port, grpc_port, devtools_port = free_port(), free_port(), free_port()
@@ -201,7 +206,7 @@ def screenshot(
             + urllib.parse.quote(f"rerun+http://127.0.0.1:{grpc_port}/proxy", safe="")
             + "&renderer=webgl"
         )
-        profile = tempfile.mkdtemp(prefix="quadwalk-chromium-")
+        profile = tempfile.mkdtemp(prefix=f"{out.stem}-chromium-profile-", dir=log_dir)
         browser_log = open(log_dir / f"{out.stem}-chromium.log", "w")
         browser = subprocess.Popen(
             [
@@ -236,29 +241,23 @@ def screenshot(
                     raise Failure(f"Chromium did not open {viewer_url}")
                 time.sleep(1)
         tools = DevTools(page["webSocketDebuggerUrl"])
-        deadline = time.monotonic() + timeout_s
+        opened = time.monotonic()
         previous = None
-        shown_since = None
         while True:
             shot = base64.b64decode(tools.call("Page.captureScreenshot", format="png")["data"])
             out.write_bytes(shot)
             image = Image.open(out).convert("RGB")
-            drawn = bool(robot_pixel_mask(image).any())
-            if drawn and shown_since is None:
-                shown_since = time.monotonic()
+            now = time.monotonic()
+            if shown_after_s is None and robot_pixel_mask(image).any():
+                shown_after_s = now - opened
+            ready = shown_after_s is not None and now - opened > shown_after_s + 5
             if (
-                previous is not None
-                and shown_since is not None
-                and time.monotonic() - shown_since > 5
+                ready
+                and previous is not None
                 and ImageChops.difference(image, previous).getbbox() is None
             ):
-                return
-            if time.monotonic() > deadline:
-                if shown_since is None:
-                    # A recording without the robot never shows its colour:
-                    # settle on two alike screenshots instead.
-                    if previous is not None and ImageChops.difference(image, previous).getbbox() is None:
-                        return
+                return shown_after_s
+            if now - opened > timeout_s:
                 raise Failure(
                     f"the viewer had not settled on {recording} after {timeout_s:.0f} s "
                     f"(last screenshot: {out})"
@@ -295,9 +294,6 @@ def stop(process: subprocess.Popen) -> None:
 
 def recording_without_robot(recording: Path, rerun: str, out: Path) -> None:
     """`recording` less the robot's shapes (the eye's anchor stays)."""
-    listing = subprocess.run(
-        [rerun, "rrd", "stats", str(recording)], capture_output=True, text=True
-    )
     printed = subprocess.run(
         [rerun, "rrd", "print", "--verbose", str(recording)], capture_output=True, text=True
     )
@@ -314,7 +310,6 @@ def recording_without_robot(recording: Path, rerun: str, out: Path) -> None:
     if not shapes:
         raise Failure(
             f"{recording} has no robot shapes (world/robot/<link>/shape_<k>); is it a quadwalk recording?"
-            + (f" rrd stats: {listing.stdout[:300]}" if listing.returncode == 0 else "")
         )
     command = [rerun, "rrd", "filter", str(recording), "-o", str(out)]
     for path in shapes:
@@ -362,9 +357,12 @@ def main() -> int:
         without = work / "without-robot.rrd"
         recording_without_robot(args.recording, rerun, without)
         reference = work / "without-robot.png"
+        shown_after_s = None
         for recording, out in [(args.recording, args.out), (without, reference)]:
             started = time.monotonic()
-            screenshot(recording, out, rerun, chromium, (w, h), args.timeout, work)
+            shown_after_s = screenshot(
+                recording, out, rerun, chromium, (w, h), args.timeout, work, shown_after_s
+            )
             print(f"{out}: drawn in {time.monotonic() - started:.0f} s", file=sys.stderr)
 
         from PIL import Image, ImageChops

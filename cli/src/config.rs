@@ -239,7 +239,7 @@ fn overlay<T: Serialize + serde::de::DeserializeOwned>(
 }
 
 /// The task settings where an experiment is silent: the paper's, but for
-/// the two reward choices with which PPO learns to walk here (BENCHMARKS.md
+/// the two reward choices with which PPO learns to walk here (docs/notebook/2026-11-30-policies-that-walk.md
 /// "Policies that walk"): R_d pays only for new ground (the paper's term
 /// pays for rocking, and a policy learned to rock), and the balance terms
 /// are penalties (the paper's pay ~0.8 per phase for standing still).

@@ -2,7 +2,7 @@
 //! no `--config` is given and quadwalk has a recipe for SPEC.
 //!
 //! A recipe is an experiment file in `configs/`, compiled in, so the command
-//! users type first trains what BENCHMARKS.md measured best rather than the
+//! users type first trains what docs/notebook/2026-11-30-policies-that-walk.md measured best rather than the
 //! bare defaults. Today one: `elastic:5cm`, the 5 cm recipe
 //! (`configs/elastic-5cm-line.toml`: the rigid recipe, tiles that deepen a
 //! centimetre at a time, then 5 cm tiles; the policy observes the goals'

@@ -4,7 +4,7 @@ One machine (Ray starts itself):
 
     python python/examples/rllib_ppo.py --terrain elastic:5cm --env-runners 2 --iterations 50
 
-A cluster: start Ray on each machine first (README, "Python"), e.g.
+A cluster: start Ray on each machine first (docs/guide/python.md), e.g.
 
     ray start --head --port 6379                                        # head
     ray start --address HEAD_IP:6379 --resources '{"quadwalk_runner": 8}'  # each worker

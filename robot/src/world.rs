@@ -12,7 +12,7 @@
 //!
 //! Cost: rapier rebuilds the multibody's mass matrix and two LU
 //! factorisations in every substep, so one substep instead of rapier's
-//! default four makes a step about three times cheaper (BENCHMARKS.md).
+//! default four makes a step about three times cheaper (docs/notebook/2026-11-29-physics-three-times-faster.md).
 //!
 //! Collision groups: robot colliders meet terrain colliders only.
 
@@ -52,7 +52,7 @@ pub enum PdModel {
     /// default solver passes (4 substeps, 1 PGS iteration each) the motor
     /// rows and the foot friction do not converge: stance feet slip ~1 cm
     /// per phase and the standing robot creeps 9 cm in 10 s on rigid ground
-    /// (BENCHMARKS.md, "What the physics does").
+    /// (docs/notebook/2026-11-29-physics-three-times-faster.md, "What the physics does").
     Motor,
     /// The PD as the multibody's own implicit joint spring and damping
     /// (rapier's `MultibodyJoint::set_spring` and `Multibody::damping_mut`):
@@ -113,7 +113,7 @@ pub struct WorldConfig {
     /// row that acts only if the gap would close within the step. Every
     /// contact row of the robot costs an LU solve against its 18 x 18 mass
     /// matrix, and on tiles a sunk foot is within 2 cm of the neighbouring
-    /// tiles' side walls (BENCHMARKS.md, "Contact prediction distance").
+    /// tiles' side walls (docs/notebook/2026-11-29-physics-three-times-faster.md, "Contact prediction distance").
     pub prediction_distance_m: f64,
 }
 

@@ -662,7 +662,7 @@ impl Terrain for TiledTerrain {
         // motor) and the travel limits. A prismatic joint with its five
         // locked rows gives the same motion up to the solver's error, and
         // cost ~20 % of a step of the robot standing on 15 x 5 tiles
-        // (BENCHMARKS.md, "Tiles guided by their body").
+        // (docs/notebook/2026-11-29-physics-three-times-faster.md, "Tiles guided by their body").
         let side = p.pitch_m - p.gap_m;
         let g = self.ctx.gravity_m_per_s2;
         self.tiles = Vec::with_capacity(self.columns * self.rows);

@@ -460,14 +460,14 @@ fn crawl_walks_four_metres(terrain: &str, phases: u64) -> Value {
 
 #[test]
 fn the_scripted_crawl_walks_four_metres_on_rigid_ground() {
-    // 6.5 m in 640 phases (README; stance feet slip ~4.6 mm per phase);
+    // 6.5 m in 640 phases (docs/guide/task.md; stance feet slip ~4.6 mm per phase);
     // 4 m take ~400.
     crawl_walks_four_metres("rigid", 480);
 }
 
 #[test]
 fn the_scripted_crawl_walks_four_metres_on_2cm_tiles() {
-    // 4.4 m in 640 phases with seed 0 (4.5 and 4.4 m with seeds 1 and 2, README).
+    // 4.4 m in 640 phases with seed 0 (4.5 and 4.4 m with seeds 1 and 2, docs/guide/task.md).
     let r = crawl_walks_four_metres("elastic:2cm", 640);
     assert_eq!(r["regions"], serde_json::json!(["elastic:2cm"]));
     assert!(f(&r, "lateral_drift_m").abs() < 0.5, "{r}");

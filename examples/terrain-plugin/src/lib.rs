@@ -1,5 +1,5 @@
 //! `pontoon:<depth>`: a terrain model written outside quadwalk, the example
-//! of `README.md` "Adding a terrain model".
+//! of `docs/guide/terrains.md` "Adding a terrain model".
 //!
 //! The ground is a row of pontoons along x: plates 60 cm long (`plate=`) and
 //! 1.2 m wide, each on a vertical spring, so the whole robot stands on one or

@@ -53,7 +53,7 @@
 //!   gait of 2 cm per phase (8 m in 400 phases) earns 0.8 per phase, what
 //!   standing earns from the other four terms. Measured: with the
 //!   termination's -10 this pays a lunge (SAC learned to dive 0.4 m in
-//!   three phases and fall, BENCHMARKS.md). `distance_reward = "tracking"`
+//!   three phases and fall, docs/notebook/2026-11-30-sac-on-5cm-tiles.md). `distance_reward = "tracking"`
 //!   ([`DistanceReward::Tracking`]) pays exp(-((p - p*) / (p*/2))^2) for a
 //!   phase's progress p and the target pace p* = `target_progress_m`
 //!   (default 2.5 cm per phase, 10 m in 400 phases): at most 1 per phase,

@@ -37,48 +37,9 @@
 //!                         # networks' input is fixed for a run)
 //! ```
 //!
-//! ```toml
-//! [task]
-//! max_phases = 40
-//! goal_spacing_m = 2.0
-//! start_x_range_m = [-0.5, 0.5]
-//! first_goal_ahead_range_m = [0.3, 2.3]  # optional: the first goal's distance ahead
-//!                                # is drawn from this range (default: goal_spacing_m)
-//! goal_y_offset_range_m = [-0.1, 0.1]    # the goals' line aside of the start (default [0, 0])
-//! distance_reward = "new_ground" # quadwalk's default; "progress" is the paper's; or "forward", "tracking"
-//! forward_reward_per_m = 40.0    # R_d per metre with "forward" (both ways)
-//! target_progress_m = 0.025      # the pace per phase "tracking" pays most for
-//! max_paid_progress_m = 0.04     # optional: "new_ground" pays at most this much
-//!                                # new ground per phase (a pace cap), m
-//! orientation_lookahead_m = 1.0  # optional: R_o heads for the first goal at least
-//!                                # this far away (default 0: the current goal, the paper's)
-//! balance_terms = "penalty"      # quadwalk's default: R_o, R_s, R_t, R_r shifted by
-//!                                # their best value (standing earns ~0); "paper": the paper's
-//! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
-//!                                # action is a residual on the crawl (+27 observations)
-//!
-//! [task.observation]      # the paper's ablations
-//! foot_history = false    # drop the three previous phase-start foot positions (-36)
-//! foot_history_phases = 2 # or keep only the 2 (or 1) newest of them (-12 each)
-//! short_history = true    # foot positions 4 and 8 ms ago (24)
-//! foot_velocity = true    # foot velocities (12)
-//! goal_line_ahead_m = 1.0 # optional: the goal blocks show the point on the goals'
-//!                         # line this far ahead of the base, and R_o heads for it
-//!                         # (default: the current goal, the paper's; not with
-//!                         # orientation_lookahead_m)
-//! ```
-//!
-//! ```toml
-//! [physics]               # robot::WorldConfig; these are the defaults
-//! pd = "implicit_spring"  # or "motor": a rapier motor constraint per joint
-//! substeps = 1            # rapier num_solver_iterations
-//! pgs_iterations = 4      # rapier num_internal_pgs_iterations
-//! ccd = true
-//! kp_n_m_per_rad = 600.0
-//! kd_n_m_s_per_rad = 8.0
-//! friction = 1.0          # of the robot's colliders
-//! prediction_distance_m = 0.02  # rapier's: shapes this close get speculative contacts
-//! ```
+//! `[task]` is `robot::task::TaskConfig` and `[physics]` `robot::WorldConfig`,
+//! each with its keys, defaults and validation documented beside it; where
+//! the file is silent, the task takes quadwalk's defaults ([`default_task`]).
 //!
 //! The terrain is given either as a spec string or as a table whose keys are
 //! the plugin's parameters; both go through the same registry validation:
@@ -103,10 +64,8 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 use learn::sac::SacConfig;
 use learn::{Algo, PpoConfig};
-use robot::task::{
-    ActionPrior, BalanceTerms, DistanceReward, FOOT_HISTORY_PHASES, ObservationConfig, TaskConfig,
-};
-use robot::{PdModel, WorldConfig};
+use robot::WorldConfig;
+use robot::task::{BalanceTerms, DistanceReward, TaskConfig};
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
 
@@ -384,18 +343,15 @@ impl Experiment {
             .validate()
             .with_context(|| format!("config {source} [train]"))?;
         let task = resolve_task(&task_table).map_err(|e| anyhow!("config {source} [task]: {e}"))?;
-        let physics = match doc.get("physics") {
+        let physics: WorldConfig = match doc.get("physics") {
             None => WorldConfig::default(),
-            Some(value) => {
-                let section: PhysicsSection =
-                    value.clone().try_into().map_err(|e: toml::de::Error| {
-                        anyhow!("config {source} [physics]: {}", e.message())
-                    })?;
-                section
-                    .resolve()
-                    .map_err(|e| anyhow!("config {source} [physics]: {e}"))?
-            }
+            Some(toml::Value::Table(table)) => overlay(&WorldConfig::default(), Some(table))
+                .map_err(|e| anyhow!("config {source} [physics]: {e}"))?,
+            Some(_) => bail!("config {source} [physics]: must be a table"),
         };
+        physics
+            .validate()
+            .map_err(|e| anyhow!("config {source} [physics]: {e}"))?;
         let sac = sac_settings(algo, sac_table.as_ref())
             .map_err(|e| anyhow!("config {source} [sac]: {e}"))?;
         let experiment = Self {
@@ -640,47 +596,19 @@ impl Experiment {
     /// The whole experiment as TOML, every value spelt out; parsing it
     /// gives this experiment back.
     pub fn to_toml(&self) -> String {
-        let t = &self.task;
-        let o = &t.observation;
         let mut text = format!(
-            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n[task]\ngoal_spacing_m = {:?}\ngoal_reached_m = {:?}\n{}goal_y_offset_range_m = [{:?}, {:?}]\nmax_phases = {}\nstart_x_range_m = [{:?}, {:?}]\nstart_y_range_m = [{:?}, {:?}]\nmin_base_height_m = {:?}\nmax_pitch_deg = {:?}\ntermination_reward = {:?}\nsettle_secs = {:?}\ndistance_reward = {:?}\nforward_reward_per_m = {:?}\ntarget_progress_m = {:?}\n{}orientation_lookahead_m = {:?}\nbalance_terms = {:?}\naction_prior = {:?}\n\n[task.observation]\nfoot_history = {}\n{}short_history = {}\nfoot_velocity = {}\n{}\n",
-            self.terrain.to_string(),
-            t.goal_spacing_m,
-            t.goal_reached_m,
-            t.first_goal_ahead_range_m
-                .map_or(String::new(), |(low, high)| format!(
-                    "first_goal_ahead_range_m = [{low:?}, {high:?}]\n"
-                )),
-            t.goal_y_offset_range_m.0,
-            t.goal_y_offset_range_m.1,
-            t.max_phases,
-            t.start_x_range_m.0,
-            t.start_x_range_m.1,
-            t.start_y_range_m.0,
-            t.start_y_range_m.1,
-            t.min_base_height_m,
-            t.max_pitch_deg,
-            t.termination_reward,
-            t.settle_secs,
-            t.distance_reward.name(),
-            t.forward_reward_per_m,
-            t.target_progress_m,
-            t.max_paid_progress_m.map_or(String::new(), |cap| format!(
-                "max_paid_progress_m = {cap:?}\n"
-            )),
-            t.orientation_lookahead_m,
-            t.balance_terms.name(),
-            t.action_prior.name(),
-            o.foot_history,
-            (o.foot_history_phases != FOOT_HISTORY_PHASES)
-                .then_some(format!("foot_history_phases = {}\n", o.foot_history_phases))
-                .unwrap_or_default(),
-            o.short_history,
-            o.foot_velocity,
-            o.goal_line_ahead_m.map_or(String::new(), |ahead_m| format!(
-                "goal_line_ahead_m = {ahead_m:?}\n"
-            )),
+            "# quadwalk experiment, every setting resolved\n\n[terrain]\nspec = {:?}\n\n",
+            self.terrain.to_string()
         );
+        // a struct, not a `toml::Table`, so that the keys keep the order
+        // `TaskConfig` declares them in
+        #[derive(Serialize)]
+        struct TaskTable<'a> {
+            task: &'a TaskConfig,
+        }
+        let task = TaskTable { task: &self.task };
+        text.push_str(&toml::to_string(&task).expect("task settings serialise"));
+        text.push('\n');
         text.push_str(&format!("[physics]\n{}\n", physics_toml(&self.physics)));
         text.push_str(&format!("[algo]\nname = {:?}\n\n", self.algo.name()));
         let mut tables = toml::Table::new();
@@ -742,10 +670,9 @@ fn debug_difference(a: &impl std::fmt::Debug, b: &impl std::fmt::Debug) -> Strin
 
 /// `[task]`'s table resolved over [`default_task`].
 fn resolve_task(table: &toml::Table) -> Result<TaskConfig, String> {
-    let section: TaskSection = toml::Value::Table(table.clone())
-        .try_into()
-        .map_err(|e: toml::de::Error| e.message().to_string())?;
-    section.resolve()
+    let task: TaskConfig = overlay(&default_task(), Some(table)).map_err(|e| e.to_string())?;
+    task.validate().map_err(|e| e.to_string())?;
+    Ok(task)
 }
 
 /// A stage's task: `[task]`'s keys with the stage's `[curriculum.task]`
@@ -821,306 +748,15 @@ fn curriculum_from_doc(
         .collect()
 }
 
-/// `[task]`: every key optional, defaults from [`TaskConfig::default`].
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct TaskSection {
-    goal_spacing_m: Option<f64>,
-    goal_reached_m: Option<f64>,
-    first_goal_ahead_range_m: Option<[f64; 2]>,
-    goal_y_offset_range_m: Option<[f64; 2]>,
-    max_phases: Option<usize>,
-    start_x_range_m: Option<[f64; 2]>,
-    start_y_range_m: Option<[f64; 2]>,
-    min_base_height_m: Option<f64>,
-    max_pitch_deg: Option<f64>,
-    termination_reward: Option<f64>,
-    settle_secs: Option<f64>,
-    distance_reward: Option<String>,
-    forward_reward_per_m: Option<f64>,
-    target_progress_m: Option<f64>,
-    max_paid_progress_m: Option<f64>,
-    orientation_lookahead_m: Option<f64>,
-    balance_terms: Option<String>,
-    action_prior: Option<String>,
-    observation: Option<ObservationSection>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ObservationSection {
-    foot_history: Option<bool>,
-    foot_history_phases: Option<usize>,
-    short_history: Option<bool>,
-    foot_velocity: Option<bool>,
-    goal_line_ahead_m: Option<f64>,
-}
-
-impl TaskSection {
-    fn resolve(self) -> Result<TaskConfig, String> {
-        let d = default_task();
-        let o = ObservationConfig::default();
-        let positive = |name: &str, v: Option<f64>, default: f64| match v {
-            Some(v) if !(v.is_finite() && v > 0.0) => {
-                Err(format!("{name} must be a positive number, got {v}"))
-            }
-            Some(v) => Ok(v),
-            None => Ok(default),
-        };
-        let range = |name: &str, v: Option<[f64; 2]>, default: (f64, f64)| match v {
-            Some([a, b]) if !(a.is_finite() && b.is_finite() && a <= b) => Err(format!(
-                "{name} must be [low, high] with low <= high, got [{a}, {b}]"
-            )),
-            Some([a, b]) => Ok((a, b)),
-            None => Ok(default),
-        };
-        let max_phases = self.max_phases.unwrap_or(d.max_phases);
-        if max_phases == 0 {
-            return Err("max_phases must be at least 1".to_string());
-        }
-        let termination_reward = self.termination_reward.unwrap_or(d.termination_reward);
-        if !termination_reward.is_finite() {
-            return Err("termination_reward must be finite".to_string());
-        }
-        let distance_reward = match self.distance_reward {
-            Some(name) => DistanceReward::from_name(&name).ok_or_else(|| {
-                format!(
-                    "distance_reward must be \"progress\" (the paper's), \"new_ground\", \"forward\" or \"tracking\", got {name:?}"
-                )
-            })?,
-            None => d.distance_reward,
-        };
-        let max_paid_progress_m = match self.max_paid_progress_m {
-            Some(v) if !(v.is_finite() && v > 0.0) => {
-                return Err(format!(
-                    "max_paid_progress_m must be a positive number (m per phase), got {v}"
-                ));
-            }
-            Some(_) if distance_reward != DistanceReward::NewGround => {
-                return Err(format!(
-                    "max_paid_progress_m caps distance_reward = \"new_ground\" only, but distance_reward = {:?}",
-                    distance_reward.name()
-                ));
-            }
-            v => v,
-        };
-        let observation = match self.observation {
-            None => o,
-            Some(s) => ObservationConfig {
-                foot_history: s.foot_history.unwrap_or(o.foot_history),
-                foot_history_phases: match s.foot_history_phases {
-                    Some(n) if !(1..=FOOT_HISTORY_PHASES).contains(&n) => {
-                        return Err(format!(
-                            "observation.foot_history_phases must be 1 to {FOOT_HISTORY_PHASES} (the previous phases whose start foot positions are observed), got {n}"
-                        ));
-                    }
-                    Some(_) if s.foot_history == Some(false) => {
-                        return Err(
-                            "observation.foot_history_phases sets the length of the foot-position history, but foot_history = false turns it off; keep one of the two"
-                                .to_string(),
-                        );
-                    }
-                    Some(n) => n,
-                    None => o.foot_history_phases,
-                },
-                short_history: s.short_history.unwrap_or(o.short_history),
-                foot_velocity: s.foot_velocity.unwrap_or(o.foot_velocity),
-                goal_line_ahead_m: match s.goal_line_ahead_m {
-                    Some(v) if !(v.is_finite() && 0.0 < v && v <= 100.0) => {
-                        return Err(format!(
-                            "observation.goal_line_ahead_m must be in (0, 100] m, got {v}"
-                        ));
-                    }
-                    v => v,
-                },
-            },
-        };
-        if let (Some(ahead_m), Some(lookahead_m)) =
-            (observation.goal_line_ahead_m, self.orientation_lookahead_m)
-            && lookahead_m > 0.0
-        {
-            return Err(format!(
-                "orientation_lookahead_m = {lookahead_m} and observation.goal_line_ahead_m = {ahead_m} both set R_o's heading target (with goal_line_ahead_m, R_o heads for the observed point); keep one of the two"
-            ));
-        }
-        Ok(TaskConfig {
-            goal_spacing_m: positive("goal_spacing_m", self.goal_spacing_m, d.goal_spacing_m)?,
-            goal_reached_m: positive("goal_reached_m", self.goal_reached_m, d.goal_reached_m)?,
-            first_goal_ahead_range_m: match self.first_goal_ahead_range_m {
-                Some([a, b]) if !(a.is_finite() && b.is_finite() && 0.0 < a && a <= b) => {
-                    return Err(format!(
-                        "first_goal_ahead_range_m must be [low, high] with 0 < low <= high, got [{a}, {b}]"
-                    ));
-                }
-                Some([a, b]) => Some((a, b)),
-                None => d.first_goal_ahead_range_m,
-            },
-            goal_y_offset_range_m: range(
-                "goal_y_offset_range_m",
-                self.goal_y_offset_range_m,
-                d.goal_y_offset_range_m,
-            )?,
-            max_phases,
-            start_x_range_m: range("start_x_range_m", self.start_x_range_m, d.start_x_range_m)?,
-            start_y_range_m: range("start_y_range_m", self.start_y_range_m, d.start_y_range_m)?,
-            min_base_height_m: positive(
-                "min_base_height_m",
-                self.min_base_height_m,
-                d.min_base_height_m,
-            )?,
-            max_pitch_deg: positive("max_pitch_deg", self.max_pitch_deg, d.max_pitch_deg)?,
-            termination_reward,
-            settle_secs: match self.settle_secs {
-                Some(v) if !(v.is_finite() && v >= 0.0) => {
-                    return Err(format!("settle_secs must be >= 0, got {v}"));
-                }
-                Some(v) => v,
-                None => d.settle_secs,
-            },
-            distance_reward,
-            forward_reward_per_m: match self.forward_reward_per_m {
-                Some(v) if !(v.is_finite() && (0.0..=1e4).contains(&v)) => {
-                    return Err(format!("forward_reward_per_m must be in [0, 10000], got {v}"));
-                }
-                Some(v) => v,
-                None => d.forward_reward_per_m,
-            },
-            target_progress_m: positive(
-                "target_progress_m",
-                self.target_progress_m,
-                d.target_progress_m,
-            )?,
-            max_paid_progress_m,
-            orientation_lookahead_m: match self.orientation_lookahead_m {
-                Some(v) if !(v.is_finite() && (0.0..=100.0).contains(&v)) => {
-                    return Err(format!(
-                        "orientation_lookahead_m must be in [0, 100] m, got {v}"
-                    ));
-                }
-                Some(v) => v,
-                None => d.orientation_lookahead_m,
-            },
-            balance_terms: match self.balance_terms {
-                Some(name) => BalanceTerms::from_name(&name).ok_or_else(|| {
-                    format!(
-                        "balance_terms must be \"paper\" (the paper's) or \"penalty\", got {name:?}"
-                    )
-                })?,
-                None => d.balance_terms,
-            },
-            action_prior: match self.action_prior {
-                Some(name) => ActionPrior::from_name(&name).ok_or_else(|| {
-                    format!(
-                        "action_prior must be \"none\" (the paper's) or \"scripted_crawl\", got {name:?}"
-                    )
-                })?,
-                None => d.action_prior,
-            },
-            observation,
-        })
-    }
-}
-
 /// The `[physics]` table's keys and values for `physics` (without the
 /// header): every key spelt out, in the order an experiment file lists them.
 pub fn physics_toml(physics: &WorldConfig) -> String {
-    toml::to_string(&PhysicsSection::from(physics)).expect("physics settings serialise")
+    toml::to_string(physics).expect("physics settings serialise")
 }
 
 /// The `[physics]` settings as JSON, under the keys of the experiment file.
 pub fn physics_json(physics: &WorldConfig) -> serde_json::Value {
-    serde_json::to_value(PhysicsSection::from(physics)).expect("physics settings serialise")
-}
-
-/// `[physics]`: every key optional, defaults from [`WorldConfig::default`].
-#[derive(Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct PhysicsSection {
-    pd: Option<String>,
-    substeps: Option<usize>,
-    pgs_iterations: Option<usize>,
-    ccd: Option<bool>,
-    kp_n_m_per_rad: Option<f64>,
-    kd_n_m_s_per_rad: Option<f64>,
-    friction: Option<f64>,
-    prediction_distance_m: Option<f64>,
-}
-
-impl From<&WorldConfig> for PhysicsSection {
-    fn from(p: &WorldConfig) -> Self {
-        // Spelt out field by field, so that a new setting fails to compile
-        // here until it has its key.
-        let WorldConfig {
-            kp_n_m_per_rad,
-            kd_n_m_s_per_rad,
-            pd,
-            solver_iterations,
-            pgs_iterations,
-            ccd,
-            friction,
-            prediction_distance_m,
-        } = *p;
-        PhysicsSection {
-            pd: Some(pd.name().to_string()),
-            substeps: Some(solver_iterations),
-            pgs_iterations: Some(pgs_iterations),
-            ccd: Some(ccd),
-            kp_n_m_per_rad: Some(kp_n_m_per_rad),
-            kd_n_m_s_per_rad: Some(kd_n_m_s_per_rad),
-            friction: Some(friction),
-            prediction_distance_m: Some(prediction_distance_m),
-        }
-    }
-}
-
-impl PhysicsSection {
-    fn resolve(self) -> Result<WorldConfig, String> {
-        let d = WorldConfig::default();
-        let count = |name: &str, v: Option<usize>, default: usize| match v {
-            Some(v) if !(1..=64).contains(&v) => Err(format!("{name} must be in 1..=64, got {v}")),
-            Some(v) => Ok(v),
-            None => Ok(default),
-        };
-        let at_least = |name: &str, v: Option<f64>, low: f64, default: f64| match v {
-            Some(v) if !(v.is_finite() && v >= low) => {
-                Err(format!("{name} must be a finite number >= {low}, got {v}"))
-            }
-            Some(v) => Ok(v),
-            None => Ok(default),
-        };
-        let kp = at_least("kp_n_m_per_rad", self.kp_n_m_per_rad, 0.0, d.kp_n_m_per_rad)?;
-        if kp == 0.0 {
-            return Err("kp_n_m_per_rad must be positive, got 0".into());
-        }
-        Ok(WorldConfig {
-            kp_n_m_per_rad: kp,
-            kd_n_m_s_per_rad: at_least(
-                "kd_n_m_s_per_rad",
-                self.kd_n_m_s_per_rad,
-                0.0,
-                d.kd_n_m_s_per_rad,
-            )?,
-            pd: match self.pd {
-                Some(name) => PdModel::from_name(&name).ok_or_else(|| {
-                    format!("pd must be \"implicit_spring\" or \"motor\", got {name:?}")
-                })?,
-                None => d.pd,
-            },
-            solver_iterations: count("substeps", self.substeps, d.solver_iterations)?,
-            pgs_iterations: count("pgs_iterations", self.pgs_iterations, d.pgs_iterations)?,
-            ccd: self.ccd.unwrap_or(d.ccd),
-            friction: at_least("friction", self.friction, 0.0, d.friction)?,
-            prediction_distance_m: match self.prediction_distance_m {
-                Some(v) if !(v.is_finite() && v > 0.0 && v <= 0.1) => {
-                    return Err(format!(
-                        "prediction_distance_m must be in (0, 0.1] m, got {v}"
-                    ));
-                }
-                Some(v) => v,
-                None => d.prediction_distance_m,
-            },
-        })
-    }
+    serde_json::to_value(physics).expect("physics settings serialise")
 }
 
 /// Reads the `[terrain]` section of a parsed file; `source` names it in errors.
@@ -1185,6 +821,8 @@ fn value_text(value: &toml::Value) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use robot::PdModel;
+    use robot::task::ActionPrior;
 
     impl Experiment {
         /// [`Experiment::from_toml`] with the built-in terrains.

@@ -11,8 +11,10 @@ pub mod snapshot;
 pub mod stand;
 pub mod task;
 pub mod world;
+pub mod world_config;
 
 pub use kinematics::{IkSolution, KinematicsError, LegKinematics};
 pub use model::{LAIKAGO_URDF, LegName, ModelError, RobotModel};
 pub use stand::{StandReport, stand};
-pub use world::{DT_SECS, GroundContacts, PdModel, World, WorldConfig, WorldError};
+pub use world::{DT_SECS, GroundContacts, World, WorldError};
+pub use world_config::{PdModel, WorldConfig, WorldConfigError};

@@ -25,6 +25,7 @@ use terrain_plugins::{Terrain, robot_collision_groups};
 use crate::kinematics::{KinematicsError, LegKinematics};
 use crate::model::{Geometry, RobotModel};
 use crate::seam::{from_pose, from_vector, to_matrix, to_pose, to_vector};
+pub use crate::world_config::{PdModel, WorldConfig, WorldConfigError};
 
 /// Physics step, seconds (240 Hz, as the paper).
 pub const DT_SECS: f64 = 1.0 / 240.0;
@@ -42,95 +43,6 @@ const ANG_X: usize = 3;
 /// Two shapes closer than this touch, m (rapier also pairs shapes up to
 /// 2 cm apart, for speculative contacts; those do not count).
 pub const TOUCH_DISTANCE_M: f64 = 0.001;
-
-/// How the joints' PD controllers are simulated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum PdModel {
-    /// A `MotorModel::ForceBased` position motor per joint: a velocity
-    /// constraint row in rapier's solver, solved with the contacts in every
-    /// substep, its force capped at the joint's effort. With rapier's
-    /// default solver passes (4 substeps, 1 PGS iteration each) the motor
-    /// rows and the foot friction do not converge: stance feet slip ~1 cm
-    /// per phase and the standing robot creeps 9 cm in 10 s on rigid ground
-    /// (docs/notebook/2026-11-29-physics-three-times-faster.md, "What the physics does").
-    Motor,
-    /// The PD as the multibody's own implicit joint spring and damping
-    /// (rapier's `MultibodyJoint::set_spring` and `Multibody::damping_mut`):
-    /// `tau = kp (q* - q) - kd q'`, integrated backward-Euler inside the
-    /// articulated dynamics, so no solver rows. The effort cap is applied
-    /// before each step: where the PD torque at the current state would
-    /// exceed the effort, the spring's rest angle is moved so that it equals
-    /// the cap, `rest = q + (clamp(tau) + kd q') / kp`. The default: stable
-    /// at one substep, and what the robot does then matches the motor model
-    /// solved to convergence (4 substeps x 4 PGS iterations).
-    #[default]
-    ImplicitSpring,
-}
-
-impl PdModel {
-    /// The name used in configs.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::Motor => "motor",
-            Self::ImplicitSpring => "implicit_spring",
-        }
-    }
-
-    /// The model of a config name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "motor" => Some(Self::Motor),
-            "implicit_spring" => Some(Self::ImplicitSpring),
-            _ => None,
-        }
-    }
-}
-
-/// Settings of the world.
-#[derive(Debug, Clone, PartialEq)]
-pub struct WorldConfig {
-    /// PD position gain, N m/rad
-    pub kp_n_m_per_rad: f64,
-    /// PD velocity gain, N m s/rad
-    pub kd_n_m_s_per_rad: f64,
-    /// how the PD is simulated
-    pub pd: PdModel,
-    /// rapier substeps per step (`num_solver_iterations`); the multibody's
-    /// mass matrix and its LU are rebuilt in each, so a step costs about
-    /// this many times the articulated dynamics
-    pub solver_iterations: usize,
-    /// rapier constraint-solver passes inside each substep
-    /// (`num_internal_pgs_iterations`)
-    pub pgs_iterations: usize,
-    /// continuous collision detection against fixed colliders (rapier's
-    /// `max_ccd_substeps` 1, or 0 when off)
-    pub ccd: bool,
-    /// friction coefficient of the robot's colliders
-    pub friction: f64,
-    /// how far apart two shapes may be and still get a contact point, m
-    /// (rapier's `normalized_prediction_distance`, its default 0.02 m): a
-    /// point closer than this but not touching is speculative, a solver
-    /// row that acts only if the gap would close within the step. Every
-    /// contact row of the robot costs an LU solve against its 18 x 18 mass
-    /// matrix, and on tiles a sunk foot is within 2 cm of the neighbouring
-    /// tiles' side walls (docs/notebook/2026-11-29-physics-three-times-faster.md, "Contact prediction distance").
-    pub prediction_distance_m: f64,
-}
-
-impl Default for WorldConfig {
-    fn default() -> Self {
-        Self {
-            kp_n_m_per_rad: 600.0,
-            kd_n_m_s_per_rad: 8.0,
-            pd: PdModel::ImplicitSpring,
-            solver_iterations: 1,
-            pgs_iterations: 4,
-            ccd: true,
-            friction: 1.0,
-            prediction_distance_m: 0.02,
-        }
-    }
-}
 
 /// Why a world could not be made.
 #[derive(Debug, thiserror::Error)]

@@ -1,10 +1,54 @@
-//! The task's settings and their named choices.
+//! The task's settings and their named choices, as an experiment file's
+//! `[task]` table spells them (serde), and their validation.
+//!
+//! ```toml
+//! [task]
+//! max_phases = 40
+//! goal_spacing_m = 2.0
+//! start_x_range_m = [-0.5, 0.5]
+//! first_goal_ahead_range_m = [0.3, 2.3]  # optional: the first goal's distance ahead
+//!                                # is drawn from this range (default: goal_spacing_m)
+//! goal_y_offset_range_m = [-0.1, 0.1]    # the goals' line aside of the start (default [0, 0])
+//! distance_reward = "new_ground" # "progress" is the paper's; or "forward", "tracking"
+//! forward_reward_per_m = 40.0    # R_d per metre with "forward" (both ways)
+//! target_progress_m = 0.025      # the pace per phase "tracking" pays most for
+//! max_paid_progress_m = 0.04     # optional: "new_ground" pays at most this much
+//!                                # new ground per phase (a pace cap), m
+//! orientation_lookahead_m = 1.0  # optional: R_o heads for the first goal at least
+//!                                # this far away (default 0: the current goal, the paper's)
+//! balance_terms = "penalty"      # R_o, R_s, R_t, R_r shifted by their best value
+//!                                # (standing earns ~0); "paper": the paper's
+//! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
+//!                                # action is a residual on the crawl (+27 observations)
+//!
+//! [task.observation]      # the paper's ablations
+//! foot_history = false    # drop the three previous phase-start foot positions (-36)
+//! foot_history_phases = 2 # or keep only the 2 (or 1) newest of them (-12 each)
+//! short_history = true    # foot positions 4 and 8 ms ago (24)
+//! foot_velocity = true    # foot velocities (12)
+//! goal_line_ahead_m = 1.0 # optional: the goal blocks show the point on the goals'
+//!                         # line this far ahead of the base, and R_o heads for it
+//!                         # (default: the current goal, the paper's; not with
+//!                         # orientation_lookahead_m)
+//! ```
+//!
+//! A key the table omits takes [`TaskConfig::default`]'s value (the
+//! paper's); unknown keys are errors. [`TaskConfig::validate`] checks the
+//! values and their relations.
 
-use super::observation::ObservationConfig;
+use serde::{Deserialize, Serialize};
+
+use super::observation::{FOOT_HISTORY_PHASES, ObservationConfig};
 use crate::action::ACTION_SIZE;
 
+/// A task setting out of its range, or two that contradict each other.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct TaskConfigError(pub String);
+
 /// Which distance term R_d pays (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
 pub enum DistanceReward {
     /// The paper's: alpha_d (|rho_prev| - |rho|), alpha_d = 10 when closer,
     /// 1 otherwise.
@@ -47,7 +91,8 @@ impl DistanceReward {
 }
 
 /// How the balance terms R_o, R_s, R_t, R_r pay (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
 pub enum BalanceTerms {
     /// The paper's: each term is at least 0.
     #[default]
@@ -76,7 +121,8 @@ impl BalanceTerms {
 }
 
 /// What a policy's action is added to (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
 pub enum ActionPrior {
     /// The paper's: the action is the phase's action.
     #[default]
@@ -113,8 +159,10 @@ impl ActionPrior {
     }
 }
 
-/// Settings of the task.
-#[derive(Debug, Clone, PartialEq)]
+/// Settings of the task (the `[task]` table; fields in the order an
+/// experiment file lists them).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct TaskConfig {
     /// distance from one goal to the next (and from the start to the first), m
     pub goal_spacing_m: f64,
@@ -124,6 +172,7 @@ pub struct TaskConfig {
     /// from this range (`None`: `goal_spacing_m`, the paper's), m; a goal
     /// anywhere from beside the robot to a spacing ahead, as an episode
     /// longer than a training rollout meets it
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub first_goal_ahead_range_m: Option<(f64, f64)>,
     /// the goals' line (their world y) is the start's y plus a draw from
     /// this range (the paper's: (0, 0), straight ahead), m
@@ -140,8 +189,6 @@ pub struct TaskConfig {
     pub max_pitch_deg: f64,
     /// the reward of a terminated phase
     pub termination_reward: f64,
-    /// observation switches
-    pub observation: ObservationConfig,
     /// after a reset the robot stands this long holding the squat, so that
     /// it starts loaded on the ground (tiles sunk), s
     pub settle_secs: f64,
@@ -154,6 +201,7 @@ pub struct TaskConfig {
     /// [`DistanceReward::NewGround`] pays at most this much new ground per
     /// phase (`None`: all of it), m: a pace cap, so that speed past it
     /// earns nothing and only risks a fall
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_paid_progress_m: Option<f64>,
     /// R_o judges the heading by the azimuth of the first goal on the line
     /// (the current one, then those `goal_spacing_m` apart beyond it) at
@@ -165,12 +213,112 @@ pub struct TaskConfig {
     pub balance_terms: BalanceTerms,
     /// what the policy's action is added to
     pub action_prior: ActionPrior,
+    /// observation switches
+    pub observation: ObservationConfig,
 }
 
 impl TaskConfig {
     /// Number of observation values: the switched-on blocks and the prior's.
     pub fn observation_size(&self) -> usize {
         self.observation.size() + self.action_prior.observation_size()
+    }
+
+    /// Checks every value's range and the settings that exclude each other;
+    /// the error names the key (as the `[task]` table spells it).
+    pub fn validate(&self) -> Result<(), TaskConfigError> {
+        let fail = |message: String| Err(TaskConfigError(message));
+        for (name, v) in [
+            ("goal_spacing_m", self.goal_spacing_m),
+            ("goal_reached_m", self.goal_reached_m),
+            ("min_base_height_m", self.min_base_height_m),
+            ("max_pitch_deg", self.max_pitch_deg),
+            ("target_progress_m", self.target_progress_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return fail(format!("{name} must be a positive number, got {v}"));
+            }
+        }
+        for (name, (a, b)) in [
+            ("goal_y_offset_range_m", self.goal_y_offset_range_m),
+            ("start_x_range_m", self.start_x_range_m),
+            ("start_y_range_m", self.start_y_range_m),
+        ] {
+            if !(a.is_finite() && b.is_finite() && a <= b) {
+                return fail(format!(
+                    "{name} must be [low, high] with low <= high, got [{a}, {b}]"
+                ));
+            }
+        }
+        if let Some((a, b)) = self.first_goal_ahead_range_m
+            && !(a.is_finite() && b.is_finite() && 0.0 < a && a <= b)
+        {
+            return fail(format!(
+                "first_goal_ahead_range_m must be [low, high] with 0 < low <= high, got [{a}, {b}]"
+            ));
+        }
+        if self.max_phases == 0 {
+            return fail("max_phases must be at least 1".to_string());
+        }
+        if !self.termination_reward.is_finite() {
+            return fail("termination_reward must be finite".to_string());
+        }
+        if !(self.settle_secs.is_finite() && self.settle_secs >= 0.0) {
+            return fail(format!(
+                "settle_secs must be >= 0, got {}",
+                self.settle_secs
+            ));
+        }
+        let per_m = self.forward_reward_per_m;
+        if !(per_m.is_finite() && (0.0..=1e4).contains(&per_m)) {
+            return fail(format!(
+                "forward_reward_per_m must be in [0, 10000], got {per_m}"
+            ));
+        }
+        if let Some(cap) = self.max_paid_progress_m {
+            if !(cap.is_finite() && cap > 0.0) {
+                return fail(format!(
+                    "max_paid_progress_m must be a positive number (m per phase), got {cap}"
+                ));
+            }
+            if self.distance_reward != DistanceReward::NewGround {
+                return fail(format!(
+                    "max_paid_progress_m caps distance_reward = \"new_ground\" only, but distance_reward = {:?}",
+                    self.distance_reward.name()
+                ));
+            }
+        }
+        let lookahead_m = self.orientation_lookahead_m;
+        if !(lookahead_m.is_finite() && (0.0..=100.0).contains(&lookahead_m)) {
+            return fail(format!(
+                "orientation_lookahead_m must be in [0, 100] m, got {lookahead_m}"
+            ));
+        }
+        let o = &self.observation;
+        if !(1..=FOOT_HISTORY_PHASES).contains(&o.foot_history_phases) {
+            return fail(format!(
+                "observation.foot_history_phases must be 1 to {FOOT_HISTORY_PHASES} (the previous phases whose start foot positions are observed), got {}",
+                o.foot_history_phases
+            ));
+        }
+        if !o.foot_history && o.foot_history_phases != FOOT_HISTORY_PHASES {
+            return fail(
+                "observation.foot_history_phases sets the length of the foot-position history, but foot_history = false turns it off; keep one of the two"
+                    .to_string(),
+            );
+        }
+        if let Some(ahead_m) = o.goal_line_ahead_m {
+            if !(ahead_m.is_finite() && 0.0 < ahead_m && ahead_m <= 100.0) {
+                return fail(format!(
+                    "observation.goal_line_ahead_m must be in (0, 100] m, got {ahead_m}"
+                ));
+            }
+            if lookahead_m > 0.0 {
+                return fail(format!(
+                    "orientation_lookahead_m = {lookahead_m} and observation.goal_line_ahead_m = {ahead_m} both set R_o's heading target (with goal_line_ahead_m, R_o heads for the observed point); keep one of the two"
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -196,6 +344,144 @@ impl Default for TaskConfig {
             orientation_lookahead_m: 0.0,
             balance_terms: BalanceTerms::default(),
             action_prior: ActionPrior::default(),
+        }
+    }
+}
+
+impl TryFrom<String> for DistanceReward {
+    type Error = TaskConfigError;
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        Self::from_name(&name).ok_or_else(|| TaskConfigError(format!("distance_reward must be \"progress\" (the paper's), \"new_ground\", \"forward\" or \"tracking\", got {name:?}")))
+    }
+}
+
+impl From<DistanceReward> for String {
+    fn from(value: DistanceReward) -> Self {
+        value.name().to_string()
+    }
+}
+
+impl TryFrom<String> for BalanceTerms {
+    type Error = TaskConfigError;
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        Self::from_name(&name).ok_or_else(|| {
+            TaskConfigError(format!(
+                "balance_terms must be \"paper\" (the paper's) or \"penalty\", got {name:?}"
+            ))
+        })
+    }
+}
+
+impl From<BalanceTerms> for String {
+    fn from(value: BalanceTerms) -> Self {
+        value.name().to_string()
+    }
+}
+
+impl TryFrom<String> for ActionPrior {
+    type Error = TaskConfigError;
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        Self::from_name(&name).ok_or_else(|| {
+            TaskConfigError(format!(
+                "action_prior must be \"none\" (the paper's) or \"scripted_crawl\", got {name:?}"
+            ))
+        })
+    }
+}
+
+impl From<ActionPrior> for String {
+    fn from(value: ActionPrior) -> Self {
+        value.name().to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn from_toml(text: &str) -> Result<TaskConfig, String> {
+        let task: TaskConfig = toml::from_str(text).map_err(|e| e.message().to_string())?;
+        task.validate().map_err(|e| e.to_string())?;
+        Ok(task)
+    }
+
+    #[test]
+    fn an_empty_table_is_the_papers_task_and_every_task_round_trips() {
+        assert_eq!(from_toml("").unwrap(), TaskConfig::default());
+        let task = TaskConfig {
+            first_goal_ahead_range_m: Some((0.3, 2.3)),
+            max_paid_progress_m: Some(0.03),
+            distance_reward: DistanceReward::NewGround,
+            balance_terms: BalanceTerms::Penalty,
+            action_prior: ActionPrior::ScriptedCrawl,
+            observation: ObservationConfig {
+                foot_history_phases: 2,
+                goal_line_ahead_m: Some(1.0),
+                ..ObservationConfig::default()
+            },
+            ..TaskConfig::default()
+        };
+        let text = toml::to_string(&task).unwrap();
+        assert!(text.contains("distance_reward = \"new_ground\""), "{text}");
+        assert!(text.contains("[observation]\n"), "{text}");
+        assert_eq!(from_toml(&text).unwrap(), task);
+        // the paper's defaults leave the optional keys out
+        let plain = toml::to_string(&TaskConfig::default()).unwrap();
+        for key in [
+            "first_goal_ahead_range_m",
+            "max_paid_progress_m",
+            "foot_history_phases",
+            "goal_line_ahead_m",
+        ] {
+            assert!(!plain.contains(key), "{key} in {plain}");
+        }
+    }
+
+    #[test]
+    fn bad_values_and_contradictions_name_the_key() {
+        for (text, expected) in [
+            ("max_phase = 3", "unknown field `max_phase`"),
+            ("max_phases = 0", "max_phases must be at least 1"),
+            (
+                "goal_reached_m = -0.3",
+                "goal_reached_m must be a positive number",
+            ),
+            (
+                "start_y_range_m = [0.2, -0.2]",
+                "start_y_range_m must be [low, high]",
+            ),
+            ("settle_secs = -1.0", "settle_secs must be >= 0"),
+            (
+                "forward_reward_per_m = 1e5",
+                "forward_reward_per_m must be in [0, 10000]",
+            ),
+            (
+                "distance_reward = \"progress\"\nmax_paid_progress_m = 0.03",
+                "max_paid_progress_m caps distance_reward = \"new_ground\" only",
+            ),
+            (
+                "balance_terms = \"reward\"",
+                "balance_terms must be \"paper\"",
+            ),
+            (
+                "distance_reward = \"backward\"",
+                "distance_reward must be \"progress\" (the paper's), \"new_ground\", \"forward\" or \"tracking\", got \"backward\"",
+            ),
+            (
+                "[observation]\nfoot_history_phases = 4",
+                "observation.foot_history_phases must be 1 to 3",
+            ),
+            (
+                "[observation]\nfoot_history = false\nfoot_history_phases = 2",
+                "foot_history = false turns it off",
+            ),
+            (
+                "orientation_lookahead_m = 1.0\n[observation]\ngoal_line_ahead_m = 1.0",
+                "both set R_o's heading target",
+            ),
+        ] {
+            let err = from_toml(text).unwrap_err();
+            assert!(err.contains(expected), "{text:?} gave {err:?}");
         }
     }
 }

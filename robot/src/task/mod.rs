@@ -115,7 +115,7 @@ mod observation;
 mod reward;
 mod termination;
 
-pub use config::{ActionPrior, BalanceTerms, DistanceReward, TaskConfig};
+pub use config::{ActionPrior, BalanceTerms, DistanceReward, TaskConfig, TaskConfigError};
 pub use observation::{FOOT_HISTORY_PHASES, ObservationConfig};
 pub use reward::RewardTerms;
 pub use termination::Termination;

@@ -11,12 +11,14 @@ pub const FOOT_HISTORY_PHASES: usize = 3;
 
 /// Which optional observation blocks are on (the paper's ablations), and
 /// which point the goal blocks show.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct ObservationConfig {
     /// foot positions at the start of previous phases (12 values each)
     pub foot_history: bool,
     /// how many previous phases' starts `foot_history` shows, newest last:
     /// the paper's 3 (36 values), or 1-2 for its "one less phase" ablation
+    #[serde(skip_serializing_if = "is_full_history")]
     pub foot_history_phases: usize,
     /// foot positions 4 and 8 ms ago (24 values)
     pub short_history: bool,
@@ -27,7 +29,14 @@ pub struct ObservationConfig {
     /// ahead of the base along +x, which moves with the robot and never
     /// jumps, and R_o heads for it too (not the paper's; see the module
     /// docs of [`super`]), m
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub goal_line_ahead_m: Option<f64>,
+}
+
+/// Whether `phases` is the paper's whole foot-position history (an
+/// experiment file leaves it out then).
+fn is_full_history(phases: &usize) -> bool {
+    *phases == FOOT_HISTORY_PHASES
 }
 
 impl Default for ObservationConfig {

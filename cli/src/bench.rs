@@ -235,7 +235,7 @@ pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
         args.terrains.clone()
     };
     let physics = match &args.config {
-        Some(path) => crate::config::Experiment::from_file(path, registry)?.physics,
+        Some(path) => experiment::config::Experiment::from_file(path, registry)?.physics,
         None => robot::WorldConfig::default(),
     };
     // Check every spec before the long runs start.
@@ -325,7 +325,7 @@ pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
                 "seconds_per_world": args.seconds,
                 "repeat": args.repeat,
                 "dt_s": robot::DT_SECS,
-                "physics": crate::config::physics_json(&physics),
+                "physics": experiment::config::physics_json(&physics),
                 "results": rows
             })
         );

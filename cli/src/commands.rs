@@ -3,9 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use robot::{RobotModel, World, WorldConfig};
+use robot::RobotModel;
 use serde_json::json;
 use terrain_plugins::units::format_length;
 use terrain_plugins::{BuildContext, Registry, TerrainSpec};
@@ -34,50 +34,12 @@ pub fn finite_metres(text: &str) -> Result<f64, String> {
     }
 }
 
-/// The built-in Laikago, or the URDF at `path`.
-pub fn load_robot(path: Option<&Path>) -> Result<Arc<RobotModel>> {
-    Ok(Arc::new(match path {
-        None => RobotModel::laikago(),
-        Some(path) => RobotModel::from_urdf_file(path)?,
-    }))
-}
-
 /// Parses a spec with the app's terrain plugins.
 pub fn parse_spec(registry: &Registry, spec: &str) -> Result<TerrainSpec> {
     Ok(registry.parse(spec)?)
 }
 
-/// Builds one world: terrain from `spec`, robot standing at (x, y),
-/// simulated with `physics`.
-pub fn make_world(
-    registry: &Registry,
-    spec: &TerrainSpec,
-    model: Arc<RobotModel>,
-    seed: u64,
-    xy_m: [f64; 2],
-    physics: &WorldConfig,
-) -> Result<World> {
-    let ctx = BuildContext {
-        supported_mass_kg: model.total_mass_kg(),
-        seed,
-        ..BuildContext::default()
-    };
-    let terrain = registry.create_from_spec(spec, &ctx)?;
-    let extent = terrain.extent();
-    if !extent.contains(xy_m) {
-        anyhow::bail!(
-            "start position ({}, {}) m lies outside terrain {spec}, which covers x {}..{} m, y {}..{} m",
-            xy_m[0],
-            xy_m[1],
-            extent.min_m[0],
-            extent.max_m[0],
-            extent.min_m[1],
-            extent.max_m[1]
-        );
-    }
-    World::new(model, terrain, physics.clone(), xy_m)
-        .with_context(|| format!("cannot place the robot on {spec}"))
-}
+pub use experiment::scene::{load_robot, make_world};
 
 pub fn terrain_list(registry: &Registry) -> Result<()> {
     for plugin in registry.plugins() {
@@ -203,10 +165,10 @@ pub struct SceneArgs {
 impl SceneArgs {
     /// The experiment these flags name: the config file, or the terrain
     /// spec (default `elastic:5cm`) with the default task.
-    pub fn experiment(&self, registry: &Registry) -> Result<crate::config::Experiment> {
+    pub fn experiment(&self, registry: &Registry) -> Result<experiment::config::Experiment> {
         match (&self.config, &self.terrain) {
-            (Some(path), _) => crate::config::Experiment::from_file(path, registry),
-            (None, terrain) => Ok(crate::config::Experiment::for_terrain(parse_spec(
+            (Some(path), _) => experiment::config::Experiment::from_file(path, registry),
+            (None, terrain) => Ok(experiment::config::Experiment::for_terrain(parse_spec(
                 registry,
                 terrain.as_deref().unwrap_or("elastic:5cm"),
             )?)),

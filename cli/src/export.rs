@@ -12,7 +12,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use learn::checkpoint::{LATEST_LINK, resolve_checkpoint, write_dir_atomically};
 
-use crate::train::{CONFIG_FILE, METRICS_FILE};
+use experiment::train::run_dir::{CONFIG_FILE, METRICS_FILE};
 
 /// `quadwalk export` arguments.
 #[derive(Debug, Args)]
@@ -72,7 +72,7 @@ pub fn export(registry: &terrain_plugins::Registry, args: &ExportArgs) -> Result
     let config = std::fs::read(&config_path)
         .with_context(|| format!("--checkpoint {}: {CONFIG_FILE}", args.checkpoint.display()))?;
     // the experiment must parse: a policy without its task settings is unusable
-    crate::config::Experiment::from_file(&config_path, registry)?;
+    experiment::config::Experiment::from_file(&config_path, registry)?;
     let mut files = learner.policy_files()?;
     files.push((CONFIG_FILE.to_string(), config));
     let run_dir = if args.checkpoint.join(LATEST_LINK).exists() {
@@ -80,7 +80,7 @@ pub fn export(registry: &terrain_plugins::Registry, args: &ExportArgs) -> Result
     } else {
         std::fs::canonicalize(&checkpoint)
             .ok()
-            .and_then(|c| crate::train::run_dir_of(&c))
+            .and_then(|c| experiment::train::run_dir::run_dir_of(&c))
     };
     let metrics = run_dir.map(|r| r.join(METRICS_FILE));
     if let Some(metrics) = metrics.filter(|m| m.is_file()) {

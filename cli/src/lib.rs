@@ -35,14 +35,10 @@ macro_rules! out {
 
 mod bench;
 mod commands;
-mod config;
 mod eval;
 mod export;
-mod policy;
-mod recipes;
 mod results;
 mod rollout;
-mod task_env;
 mod train;
 mod video;
 mod viz_args;
@@ -59,8 +55,7 @@ pub use terrain_plugins::{Registry, RegistryError, TerrainPlugin};
 /// experiment file's settings, building a world the way `rollout` does, and
 /// running a checkpoint.
 pub use commands::make_world;
-pub use config::Experiment;
-pub use policy::Policy;
+pub use experiment::{Experiment, Policy};
 
 /// The command line with its terrain plugins: build it, add plugins, run it.
 pub struct App {
@@ -191,29 +186,36 @@ enum TerrainCommand {
     },
 }
 
-fn run_command(command: Command, registry: &Arc<Registry>) -> anyhow::Result<()> {
+fn run_command(command: Command, registry: &Arc<Registry>) -> anyhow::Result<ExitCode> {
+    let done = |result: anyhow::Result<()>| result.map(|()| ExitCode::SUCCESS);
     match command {
-        Command::Terrain(TerrainCommand::List) => commands::terrain_list(registry),
+        Command::Terrain(TerrainCommand::List) => done(commands::terrain_list(registry)),
         Command::Terrain(TerrainCommand::Show {
             spec,
             robot,
             seed,
             json,
-        }) => commands::terrain_show(registry, &spec, robot.as_deref(), seed, json),
-        Command::Stand(args) => commands::stand(registry, &args),
-        Command::Rollout(args) => rollout::rollout(registry, &args),
-        Command::Play(args) => rollout::play(registry, &args),
-        Command::Eval(args) => eval::eval(registry, &args),
+        }) => done(commands::terrain_show(
+            registry,
+            &spec,
+            robot.as_deref(),
+            seed,
+            json,
+        )),
+        Command::Stand(args) => done(commands::stand(registry, &args)),
+        Command::Rollout(args) => done(rollout::rollout(registry, &args)),
+        Command::Play(args) => done(rollout::play(registry, &args)),
+        Command::Eval(args) => done(eval::eval(registry, &args)),
         Command::Train(args) => train::train(registry, &args),
-        Command::Bench(args) => bench::run(registry, &args),
-        Command::Results(args) => results::results(registry, &args),
-        Command::Export(args) => export::export(registry, &args),
+        Command::Bench(args) => done(bench::run(registry, &args)),
+        Command::Results(args) => done(results::results(registry, &args)),
+        Command::Export(args) => done(export::export(registry, &args)),
     }
 }
 
-fn report(result: anyhow::Result<()>) -> ExitCode {
+fn report(result: anyhow::Result<ExitCode>) -> ExitCode {
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             let chain: Vec<String> = err.chain().map(ToString::to_string).collect();

@@ -12,9 +12,10 @@ use serde_json::json;
 use viz::RerunSink;
 
 use crate::commands::{SceneArgs, make_world};
-use crate::policy::Policy;
-use crate::video::{Both, VideoArgs, VideoRecorder};
+use crate::video::{VideoArgs, VideoRecorder};
 use crate::viz_args::{RerunArgs, print_warnings};
+use experiment::Policy;
+use robot::snapshot::Both;
 use terrain_plugins::Registry;
 
 /// The flags `rollout` and `play` share with the same defaults.
@@ -224,7 +225,7 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
         .collect();
     let height = stats(&heights);
     // a fall within 1 m of the field's far end: walked off a field too short
-    let at_terrain_end = termination.is_some() && crate::eval::record::near_terrain_end(&task);
+    let at_terrain_end = termination.is_some() && experiment::eval::record::near_terrain_end(&task);
     if args.flags.json {
         let terminated = match &termination {
             None => json!(false),
@@ -280,7 +281,7 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
                     format!(
                         "yes: {t}, at the end of the terrain (x = {:.1} m): {}",
                         task.world().terrain().extent().max_m[0],
-                        crate::eval::record::terrain_end_advice(args.phases)
+                        experiment::eval::record::terrain_end_advice(args.phases)
                     )
                 } else {
                     format!("yes: {t}")

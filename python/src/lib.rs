@@ -12,7 +12,7 @@
 //! - [`scene::terrains`]: the terrain registry (name, summary, parameters).
 //!
 //! Scenes are built exactly as `quadwalk rollout` builds them
-//! (`quadwalk_cli::make_world`, `Task::new(world, task, seed)`), so an
+//! (`experiment::scene::make_world`, `Task::new(world, task, seed)`), so an
 //! episode here with seed S is the command's episode with `--seed S`.
 //! Errors in what the caller passed (a terrain spec, an experiment file, an
 //! action of the wrong size) raise `ValueError` with the message naming the

@@ -28,8 +28,8 @@ impl Policy {
                 "policy \"scripted\": the scripted crawl needs the task, not an observation; load a checkpoint",
             ));
         }
-        let policy = quadwalk_cli::Policy::from_arg(&registry, path, None).map_err(value_error)?;
-        let quadwalk_cli::Policy::Trained { learner, .. } = policy else {
+        let policy = experiment::Policy::from_arg(&registry, path, None).map_err(value_error)?;
+        let experiment::Policy::Trained { learner, .. } = policy else {
             return Err(PyValueError::new_err(format!(
                 "policy {path:?} is not a trained policy"
             )));

@@ -4,11 +4,13 @@
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
+use experiment::Experiment;
+use experiment::scene::make_world;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use quadwalk_cli::{Experiment, Registry, make_world};
 use robot::RobotModel;
 use robot::task::Task;
+use terrain_plugins::Registry;
 
 /// The terrain the environments use when neither a terrain nor a config is
 /// given: the paper's 5 cm tiles.

@@ -105,6 +105,8 @@ fn sample(samples: usize) -> impl Iterator<Item = f64> {
 
 /// Told what a phase does as it runs. Every method has an empty default.
 pub trait PhaseObserver {
+    /// An episode begins: the task is reset and settled, no phase has run.
+    fn episode_started(&mut self, _task: &Task) {}
     /// Before the first physics step of a phase.
     fn phase_started(&mut self, _task: &Task, _start: &PhaseStart) {}
     /// After physics step `step_in_phase` (1-based) of the running phase.
@@ -119,3 +121,28 @@ pub trait PhaseObserver {
 pub struct NoObserver;
 
 impl PhaseObserver for NoObserver {}
+
+/// Two observers told the same things, in order.
+pub struct Both<'a>(pub &'a mut dyn PhaseObserver, pub &'a mut dyn PhaseObserver);
+
+impl PhaseObserver for Both<'_> {
+    fn episode_started(&mut self, task: &Task) {
+        self.0.episode_started(task);
+        self.1.episode_started(task);
+    }
+
+    fn phase_started(&mut self, task: &Task, start: &PhaseStart) {
+        self.0.phase_started(task, start);
+        self.1.phase_started(task, start);
+    }
+
+    fn stepped(&mut self, task: &Task, step_in_phase: usize) {
+        self.0.stepped(task, step_in_phase);
+        self.1.stepped(task, step_in_phase);
+    }
+
+    fn phase_ended(&mut self, task: &Task, outcome: &PhaseOutcome) {
+        self.0.phase_ended(task, outcome);
+        self.1.phase_ended(task, outcome);
+    }
+}

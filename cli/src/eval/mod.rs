@@ -1,47 +1,27 @@
-//! `quadwalk eval`: a policy on many episodes of unseen seeds, run in
-//! parallel, measured the way the paper measures (Table I, Fig. 4) and the
-//! way a locomotion researcher judges a gait (success, distance
-//! percentiles, falls by cause), written as `eval.json`, `table1.md` and PNG
-//! figures; `--compare` lays several evaluations side by side.
-//!
-//! An episode is exactly `quadwalk rollout` with the same policy, terrain
-//! and seed: the same world (seeded by the episode's seed), the same start,
-//! the same actions.
+//! `quadwalk eval`: the flags, the output directory, the PNG figures, the
+//! video of the first episode, the Rerun curves and the printed summary;
+//! the evaluation itself is `experiment::eval` (`eval.json`, `table1.md`).
+//! `--compare` lays several evaluations side by side.
 
 mod compare;
 pub(crate) mod plots;
-pub(crate) mod record;
-pub(crate) mod summary;
-mod table1;
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result};
 use clap::Args;
-use rayon::prelude::*;
-use robot::task::{Task, TaskConfig};
-use robot::{RobotModel, WorldConfig};
-use serde::{Deserialize, Serialize};
-use terrain_plugins::{Registry, TerrainSpec};
+use experiment::Policy;
+pub use experiment::eval::{
+    DEFAULT_FIRST_SEED, EvalReport, EvalRequest, EvalScene, REPORT_FILE, evaluate, record, slug,
+    summary, table_columns, table1,
+};
+use robot::RobotModel;
+use terrain_plugins::Registry;
 
-use crate::commands::{SceneArgs, make_world};
-use crate::policy::Policy;
-use crate::video::{Both, VideoArgs, VideoRecorder, VideoSummary};
+use crate::commands::SceneArgs;
+use crate::video::{VideoArgs, VideoSummary};
 use crate::viz_args::RerunArgs;
 pub use plots::FIGURE_FILES;
-use record::{EpisodeRecord, EpisodeRecorder};
-use summary::Summary;
-
-/// The first episode seed unless told: far from the seeds training draws
-/// its worlds and episodes from (small integers and their derived hashes
-/// are where `train --seed` lives; these are never used there by default).
-pub const DEFAULT_FIRST_SEED: u64 = 1_000_000;
-
-/// The file every evaluation writes its measurements to.
-pub const REPORT_FILE: &str = "eval.json";
-/// The format tag inside [`REPORT_FILE`].
-const REPORT_FORMAT: &str = "quadwalk-eval/1";
 
 /// Arguments of `quadwalk eval`.
 #[derive(Debug, Args)]
@@ -88,98 +68,6 @@ pub struct EvalArgs {
     video: VideoArgs,
 }
 
-/// What an evaluation writes to [`REPORT_FILE`].
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct EvalReport {
-    /// [`REPORT_FORMAT`]
-    pub format: String,
-    /// the policy argument
-    pub policy: String,
-    /// the terrain spec
-    pub terrain: String,
-    /// the first episode's seed
-    pub first_seed: u64,
-    /// phases each episode could run
-    pub max_phases: usize,
-    /// whether actions were sampled
-    pub stochastic: bool,
-    /// the aggregates
-    pub summary: Summary,
-    /// every episode, in seed order
-    pub episodes: Vec<EpisodeRecord>,
-}
-
-/// One episode's setting, shared by every worker.
-struct Scene<'a> {
-    registry: &'a Registry,
-    spec: TerrainSpec,
-    model: Arc<RobotModel>,
-    task: TaskConfig,
-    physics: WorldConfig,
-}
-
-/// A phase's simulated duration, s.
-fn phase_secs() -> f64 {
-    robot::action::SAMPLES_PER_PHASE as f64 * robot::DT_SECS
-}
-
-/// Runs one episode of `policy` on `scene` with `seed`: the world, start and
-/// actions of `quadwalk rollout --seed SEED`; `video`, when given, draws it.
-fn run_episode(
-    policy: &mut Policy,
-    scene: &Scene,
-    seed: u64,
-    mut video: Option<&mut VideoRecorder>,
-) -> Result<EpisodeRecord> {
-    let world = make_world(
-        scene.registry,
-        &scene.spec,
-        scene.model.clone(),
-        seed,
-        [0.0, 0.0],
-        &scene.physics,
-    )?;
-    let mut task = Task::new(world, scene.task.clone(), seed);
-    let mut obs = vec![0.0f32; task.observation_size()];
-    task.reset(&mut obs);
-    let start = task.start_xy_m();
-    let mut recorder = EpisodeRecorder::default();
-    let mut reward_total = 0.0;
-    if let Some(v) = video.as_deref_mut() {
-        v.frame(&task);
-    }
-    while !task.done() {
-        let action = policy.action(&task, &obs)?;
-        let outcome = match video.as_deref_mut() {
-            Some(v) => task.step_phase_observed(&action, &mut obs, &mut Both(&mut recorder, v)),
-            None => task.step_phase_observed(&action, &mut obs, &mut recorder),
-        };
-        reward_total += outcome.reward;
-    }
-    let end = task.world().base_pose().translation.vector;
-    Ok(recorder.finish(
-        seed,
-        start,
-        [end.x, end.y],
-        task.goals_reached(),
-        reward_total,
-        phase_secs(),
-    ))
-}
-
-/// A file-name-safe form of a terrain spec or a path.
-pub(crate) fn slug(spec: &str) -> String {
-    spec.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
-}
-
 /// The default output directory: inside the policy's run directory, or
 /// under `runs/` for the scripted crawl.
 fn default_out_dir(policy: &str, spec: &str, seed: u64) -> PathBuf {
@@ -205,57 +93,11 @@ fn default_out_dir(policy: &str, spec: &str, seed: u64) -> PathBuf {
     run.join(name)
 }
 
-/// One evaluation: a policy on a scene over a list of episode seeds.
-pub struct EvalRequest {
-    /// `scripted`, or a checkpoint, run directory or exported policy
-    pub policy: String,
-    /// the terrain, task and physics (a trained policy brings its own
-    /// observation layout, action prior and physics)
-    pub experiment: crate::config::Experiment,
-    /// the experiment file, when the user gave one (a policy that observes
-    /// otherwise than it sets up is then an error)
-    pub config_path: Option<PathBuf>,
-    /// the robot
-    pub robot: Arc<RobotModel>,
-    /// one episode per seed, in this order
-    pub seeds: Vec<u64>,
-    /// phases each episode may run
-    pub phases: u32,
-    /// sample a trained policy's actions (seeded by the episode's seed)
-    pub stochastic: bool,
-    /// worker threads [default: all cores]
-    pub threads: Option<usize>,
-    /// no progress line per episode on standard error
-    pub quiet: bool,
-}
-
-/// The scene every episode of `request` runs in: its terrain, and its task
-/// and physics fitted to the policy.
-fn scene_of<'a>(registry: &'a Registry, request: &EvalRequest) -> Result<Scene<'a>> {
-    let experiment = &request.experiment;
-    let (mut task, mut physics) = (experiment.task.clone(), experiment.physics.clone());
-    let first_seed = request.seeds.first().copied().unwrap_or(DEFAULT_FIRST_SEED);
-    let policy = Policy::from_arg(
-        registry,
-        &request.policy,
-        request.stochastic.then_some(first_seed),
-    )?;
-    policy.fit_scene(&mut task, &mut physics, request.config_path.as_deref())?;
-    task.max_phases = request.phases as usize;
-    Ok(Scene {
-        registry,
-        spec: experiment.terrain.clone(),
-        model: request.robot.clone(),
-        task,
-        physics,
-    })
-}
-
-/// Runs the episode of `seed` in `scene` again (the same episode as in
-/// [`evaluate`]), drawn into `video`'s file.
+/// Runs the episode of `seed` in `scene` again (the same episode as the
+/// evaluation's), drawn into `video`'s file.
 fn record_episode(
     registry: &Registry,
-    scene: &Scene,
+    scene: &EvalScene,
     request: &EvalRequest,
     seed: u64,
     video: &VideoArgs,
@@ -269,80 +111,8 @@ fn record_episode(
         &request.policy,
         request.stochastic.then_some(seed),
     )?;
-    run_episode(&mut policy, scene, seed, Some(&mut recorder))?;
+    scene.run_episode(&mut policy, seed, Some(&mut recorder))?;
     recorder.finish().map(Some)
-}
-
-/// Runs every episode of `request` in parallel: the same episodes as
-/// `quadwalk rollout` with each seed.
-pub fn evaluate(registry: &Registry, request: &EvalRequest) -> Result<EvalReport> {
-    run_episodes(&scene_of(registry, request)?, request)
-}
-
-/// Runs every episode of `request` in `scene` (fitted to its policy by
-/// [`scene_of`]) in parallel.
-fn run_episodes(scene: &Scene, request: &EvalRequest) -> Result<EvalReport> {
-    let registry = scene.registry;
-    let first_seed = request.seeds.first().copied().unwrap_or(DEFAULT_FIRST_SEED);
-    let sample = |seed: u64| request.stochastic.then_some(seed);
-    let spec = scene.spec.clone();
-    let threads = request
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .context("cannot start the worker threads")?;
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let total = request.seeds.len();
-    let results: Vec<Result<EpisodeRecord>> = pool.install(|| {
-        request
-            .seeds
-            .par_iter()
-            .map_init(
-                // one mean-action policy per worker; a sampling policy is
-                // loaded per episode, its generator seeded by the episode
-                || (!request.stochastic).then(|| Policy::from_arg(registry, &request.policy, None)),
-                |shared, &seed| {
-                    let mut own;
-                    let policy = match shared {
-                        Some(loaded) => loaded.as_mut().map_err(|e| anyhow!("{e:#}"))?,
-                        None => {
-                            own = Policy::from_arg(registry, &request.policy, sample(seed))?;
-                            &mut own
-                        }
-                    };
-                    let record = run_episode(policy, scene, seed, None)
-                        .with_context(|| format!("episode with seed {seed}"))?;
-                    let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    if !request.quiet {
-                        eprintln!(
-                            "episode {n}/{total} (seed {seed}): {:.2} m in {} phases{}",
-                            record.distance_m,
-                            record.phases,
-                            record
-                                .fall
-                                .as_ref()
-                                .map_or(String::new(), |f| format!(", fell: {}", f.describe()))
-                        );
-                    }
-                    Ok(record)
-                },
-            )
-            .collect()
-    });
-    let episodes = results.into_iter().collect::<Result<Vec<_>>>()?;
-    let summary = Summary::of(&episodes, phase_secs());
-    Ok(EvalReport {
-        format: REPORT_FORMAT.to_string(),
-        policy: request.policy.clone(),
-        terrain: spec.to_string(),
-        first_seed,
-        max_phases: request.phases as usize,
-        stochastic: request.stochastic,
-        summary,
-        episodes,
-    })
 }
 
 /// `quadwalk eval`.
@@ -366,14 +136,27 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
         phases: args.phases,
         stochastic: args.stochastic,
         threads: args.threads.map(|n| n as usize),
-        quiet: args.json,
     };
     // the policy and its fit to the scene are checked before the output
     // directory is made
-    let scene = scene_of(registry, &request)?;
+    let scene = EvalScene::of(registry, &request)?;
     std::fs::create_dir_all(&out_dir)
         .with_context(|| format!("--out {}: cannot create the directory", out_dir.display()))?;
-    let report = run_episodes(&scene, &request)?;
+    let quiet = args.json;
+    let report = scene.run_all(&request, &|n, total, record| {
+        if !quiet {
+            eprintln!(
+                "episode {n}/{total} (seed {}): {:.2} m in {} phases{}",
+                record.seed,
+                record.distance_m,
+                record.phases,
+                record
+                    .fall
+                    .as_ref()
+                    .map_or(String::new(), |f| format!(", fell: {}", f.describe()))
+            );
+        }
+    })?;
     write_outputs(&report, &out_dir)?;
     log_to_rerun(&report, &args.rerun, &request.robot)?;
     let video = record_episode(registry, &scene, &request, args.seed, &args.video)?;
@@ -411,36 +194,9 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
     Ok(())
 }
 
-/// The Table I columns of one evaluation: each terrain type, preceded by
-/// the pooled column when there is more than one.
-fn table_columns(summary: &Summary) -> Vec<&summary::TerrainSummary> {
-    let types: Vec<_> = summary.each_terrain_type().collect();
-    if types.len() > 1 {
-        summary.terrain_types.iter().collect()
-    } else {
-        types
-    }
-}
-
 /// Writes `eval.json`, `table1.md` and the figures of `report` into `dir`.
 pub(crate) fn write_outputs(report: &EvalReport, dir: &Path) -> Result<()> {
-    let path = dir.join(REPORT_FILE);
-    std::fs::write(&path, serde_json::to_string_pretty(report)?)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    let columns: Vec<(String, &summary::TerrainSummary)> = table_columns(&report.summary)
-        .into_iter()
-        .map(|t| (t.terrain.clone(), t))
-        .collect();
-    let table = format!(
-        "# Table I: {} on {} ({} episodes, seeds {}..)\n\nMean and standard deviation of the base height h_b and the mean (and standard deviation) of each foot's target landing height relative to its squat height, cm, per terrain type under the robot (`all`: every phase pooled).\n\n{}",
-        report.policy,
-        report.terrain,
-        report.summary.episodes,
-        report.first_seed,
-        table1::markdown(&columns)
-    );
-    let path = dir.join("table1.md");
-    std::fs::write(&path, table).with_context(|| format!("cannot write {}", path.display()))?;
+    report.write(dir)?;
     let title = format!("{} on {}", report.policy_name(), report.terrain);
     let types: Vec<_> = report.summary.each_terrain_type().collect();
     plots::distance_per_episode(
@@ -459,37 +215,6 @@ pub(crate) fn write_outputs(report: &EvalReport, dir: &Path) -> Result<()> {
         &types,
     )?;
     Ok(())
-}
-
-impl EvalReport {
-    /// The policy's short name for titles (a path's last component).
-    fn policy_name(&self) -> String {
-        Path::new(&self.policy)
-            .file_name()
-            .map_or(self.policy.clone(), |n| n.to_string_lossy().to_string())
-    }
-
-    /// Reads a report written by `eval`.
-    pub fn read(dir: &Path) -> Result<Self> {
-        let path = dir.join(REPORT_FILE);
-        let text = std::fs::read_to_string(&path).with_context(|| {
-            format!(
-                "{}: no evaluation here (run `quadwalk eval --out {}` first)",
-                path.display(),
-                dir.display()
-            )
-        })?;
-        let report: Self = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not an evaluation report", path.display()))?;
-        if report.format != REPORT_FORMAT {
-            bail!(
-                "{}: format {:?}, this quadwalk reads {REPORT_FORMAT:?}",
-                path.display(),
-                report.format
-            );
-        }
-        Ok(report)
-    }
 }
 
 fn log_to_rerun(report: &EvalReport, rerun: &RerunArgs, model: &RobotModel) -> Result<()> {

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
-use crate::eval::EvalReport;
 use crate::eval::plots::{self, Curve};
+use experiment::eval::EvalReport;
 
 /// One trained policy of a variant and its evaluation.
 pub struct Run<'a> {
@@ -53,9 +53,10 @@ pub fn markdown(runs: &[Run]) -> String {
 pub fn metrics_file(policy: &str) -> Result<PathBuf> {
     let path = Path::new(policy);
     let candidates = [
-        path.join(crate::train::METRICS_FILE),
-        path.parent()
-            .map_or_else(PathBuf::new, |p| p.join(crate::train::METRICS_FILE)),
+        path.join(experiment::train::run_dir::METRICS_FILE),
+        path.parent().map_or_else(PathBuf::new, |p| {
+            p.join(experiment::train::run_dir::METRICS_FILE)
+        }),
     ];
     candidates
         .into_iter()
@@ -63,7 +64,7 @@ pub fn metrics_file(policy: &str) -> Result<PathBuf> {
         .with_context(|| {
             format!(
                 "policy {policy}: no {} beside it or in its run directory",
-                crate::train::METRICS_FILE
+                experiment::train::run_dir::METRICS_FILE
             )
         })
 }

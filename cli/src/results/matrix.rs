@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use crate::eval::EvalReport;
+use experiment::eval::EvalReport;
 
 /// One cell: a policy's evaluation on a terrain, with the commands that
 /// ran it.

@@ -155,14 +155,13 @@ impl Evaluations<'_> {
             self.registry,
             &EvalRequest {
                 policy: policy.to_string(),
-                experiment: crate::config::Experiment::for_terrain(spec),
+                experiment: experiment::config::Experiment::for_terrain(spec),
                 config_path: None,
                 robot: crate::commands::load_robot(None)?,
                 seeds: key.seeds.clone(),
                 phases: key.phases,
                 stochastic: false,
                 threads: self.args.threads.map(|t| t as usize),
-                quiet: true,
             },
         )
         .with_context(|| format!("evaluating {policy} on {terrain}"))?;

@@ -12,7 +12,7 @@
 
 use std::fmt::Write as _;
 
-use crate::eval::summary::{ALL_TERRAIN, MeanStd, TerrainSummary};
+use experiment::eval::summary::{ALL_TERRAIN, MeanStd, TerrainSummary};
 
 /// The paper's terrain specs of its four scenarios.
 pub const SCENARIO_TERRAINS: [(&str, &str); 4] = [

@@ -276,6 +276,10 @@ impl VideoRecorder {
 }
 
 impl PhaseObserver for VideoRecorder {
+    fn episode_started(&mut self, task: &Task) {
+        self.frame(task);
+    }
+
     fn phase_started(&mut self, _task: &Task, start: &PhaseStart) {
         self.swing = Some((start.swing_leg, start.landing_m()));
     }
@@ -288,26 +292,6 @@ impl PhaseObserver for VideoRecorder {
     }
 
     fn phase_ended(&mut self, _task: &Task, _outcome: &PhaseOutcome) {}
-}
-
-/// Two observers told the same things, in order.
-pub struct Both<'a>(pub &'a mut dyn PhaseObserver, pub &'a mut dyn PhaseObserver);
-
-impl PhaseObserver for Both<'_> {
-    fn phase_started(&mut self, task: &Task, start: &PhaseStart) {
-        self.0.phase_started(task, start);
-        self.1.phase_started(task, start);
-    }
-
-    fn stepped(&mut self, task: &Task, step_in_phase: usize) {
-        self.0.stepped(task, step_in_phase);
-        self.1.stepped(task, step_in_phase);
-    }
-
-    fn phase_ended(&mut self, task: &Task, outcome: &PhaseOutcome) {
-        self.0.phase_ended(task, outcome);
-        self.1.phase_ended(task, outcome);
-    }
 }
 
 #[cfg(test)]

@@ -17,8 +17,8 @@ use robot::{RobotModel, WorldConfig};
 use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
 
-use crate::commands::make_world;
 use crate::config::Experiment;
+use crate::scene::make_world;
 
 /// Per-episode metrics, in the order of `episode_metrics`.
 pub const EPISODE_METRICS: [&str; 2] = ["distance_m", "goals_reached"];

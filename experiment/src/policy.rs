@@ -57,9 +57,11 @@ impl Policy {
         };
         let learner =
             learn::Learner::load_for_acting(&dir).with_context(|| format!("policy {arg}"))?;
-        let config =
-            crate::config::Experiment::from_file(&dir.join(crate::train::CONFIG_FILE), registry)
-                .with_context(|| format!("policy {arg}"))?;
+        let config = crate::config::Experiment::from_file(
+            &dir.join(crate::train::run_dir::CONFIG_FILE),
+            registry,
+        )
+        .with_context(|| format!("policy {arg}"))?;
         // the task of the stage the policy's last iteration trained in
         let task = config
             .task_at(learner.iteration().saturating_sub(1))

@@ -1,0 +1,272 @@
+//! Training: a [`RunPlan`] run iteration by iteration on N parallel worlds
+//! (PPO, SAC or CrossQ), with `metrics.jsonl`, atomic checkpoints (every
+//! `checkpoint_every` iterations, at the end, and when stopped), curriculum
+//! stages, and Rerun loggers on chosen environments.
+//!
+//! [`train`] returns when the run is done or stopped; it never exits the
+//! process. What a front end shows (progress lines, JSON, warnings) it
+//! receives through a [`TrainObserver`]; it stops a run by setting the
+//! flag it passes in (the command line's Ctrl-C handler does), and the run
+//! then writes the checkpoint of the last completed iteration.
+
+pub mod metrics;
+mod plan;
+pub mod run_dir;
+
+use std::fs;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use learn::LearnerStats;
+use learn::checkpoint::{remove_partial_saves, write_file_atomically};
+use robot::RobotModel;
+use terrain_plugins::{Registry, TerrainSpec};
+use viz::RolloutLogger;
+
+pub use plan::RunPlan;
+use run_dir::{CONFIG_FILE, METRICS_FILE, append_line, keep_metrics_up_to, save_checkpoint};
+
+use crate::task_env::TaskEnv;
+
+/// How a run began, told once before its first iteration.
+pub struct RunStart<'a> {
+    /// the learner's name (`ppo`, `sac`, `crossq`)
+    pub algo: &'static str,
+    /// the terrain of the first iteration
+    pub terrain: &'a TerrainSpec,
+    /// parallel worlds
+    pub envs: usize,
+    /// phases per world per iteration
+    pub steps_per_env: usize,
+    /// threads stepping the worlds
+    pub threads: usize,
+    /// where the run writes
+    pub run_dir: &'a std::path::Path,
+    /// a fork: the checkpoint it went on from and its iteration
+    pub forked_from: Option<(&'a std::path::Path, u64)>,
+}
+
+/// One completed iteration.
+pub struct IterationReport<'a> {
+    /// the learner's statistics
+    pub stats: &'a LearnerStats,
+    /// the line written to `metrics.jsonl`
+    pub record: &'a serde_json::Value,
+    /// the run's total iterations
+    pub total: u64,
+    /// wall time since this process started training, s
+    pub elapsed_secs: f64,
+    /// phases stepped since this process started training
+    pub phases_done: usize,
+}
+
+/// What a front end is told while a run trains; every method has a silent
+/// default.
+pub trait TrainObserver {
+    /// Before the first iteration.
+    fn started(&mut self, _start: &RunStart) {}
+    /// A curriculum stage begins (not told for the stage a run starts in).
+    fn stage_started(
+        &mut self,
+        _stage: usize,
+        _terrain: &TerrainSpec,
+        _learning_rate: Option<f64>,
+        _task_overrides: &toml::Table,
+    ) {
+    }
+    /// After each iteration, once its metrics line is written.
+    fn iteration_done(&mut self, _report: &IterationReport) -> Result<()> {
+        Ok(())
+    }
+    /// A Rerun logger's warning (a viewer that went away, ...).
+    fn warning(&mut self, _message: &str) {}
+}
+
+/// A front end that wants to hear nothing.
+pub struct Silent;
+
+impl TrainObserver for Silent {}
+
+/// How a run ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum TrainOutcome {
+    /// every iteration ran; `latest` is the last one's checkpoint
+    Completed {
+        /// iterations in all
+        iterations: u64,
+        /// the run's `latest` link
+        checkpoint: PathBuf,
+    },
+    /// the stop flag cut iteration `iteration + 1` short; the checkpoint of
+    /// iteration `iteration` was written
+    Stopped {
+        /// the last completed iteration
+        iteration: u64,
+        /// the run's `latest` link
+        checkpoint: PathBuf,
+    },
+}
+
+/// Runs `plan` to its last iteration or until `stop` is set. `loggers`
+/// stream environments to Rerun (environment index, logger); `model` is
+/// the robot every world holds.
+pub fn train(
+    registry: &Arc<Registry>,
+    plan: RunPlan,
+    model: &Arc<RobotModel>,
+    loggers: Vec<(usize, RolloutLogger)>,
+    observer: &mut dyn TrainObserver,
+    stop: Arc<AtomicBool>,
+) -> Result<TrainOutcome> {
+    let RunPlan {
+        experiment,
+        run_dir,
+        learner: mut trainer,
+        threads,
+        fork,
+    } = plan;
+    let total = experiment.total_iterations();
+    let start_iteration = trainer.iteration();
+    if start_iteration >= total {
+        bail!(
+            "the run in {} has done {start_iteration} of {total} iterations already; pass a larger --iterations to go on",
+            run_dir.display()
+        );
+    }
+    fs::create_dir_all(run_dir.join("checkpoints"))
+        .with_context(|| format!("cannot create the run directory {}", run_dir.display()))?;
+    remove_partial_saves(&run_dir);
+    remove_partial_saves(&run_dir.join("checkpoints"));
+    let config_text = experiment.to_toml();
+    write_file_atomically(&run_dir.join(CONFIG_FILE), config_text.as_bytes())?;
+    if let Some(checkpoint) = &fork {
+        run_dir::start_fork(
+            &run_dir,
+            checkpoint,
+            &trainer,
+            &config_text,
+            experiment.train.keep_checkpoints,
+        )?;
+    }
+    let metrics_path = run_dir.join(METRICS_FILE);
+    keep_metrics_up_to(&metrics_path, start_iteration)?;
+    let latest = run_dir.join(learn::checkpoint::LATEST_LINK);
+
+    // the worlds of 0-based iteration `iteration`: its stage's terrain and task
+    let build_env = |iteration| {
+        TaskEnv::new(
+            registry,
+            experiment.terrain_at(iteration).1,
+            experiment.task_at(iteration),
+            model,
+            &experiment,
+            threads,
+            stop.clone(),
+        )
+    };
+    let mut stage = experiment.terrain_at(start_iteration).0;
+    let mut env = build_env(start_iteration)?;
+    for (e, logger) in loggers {
+        env.attach_logger(e, logger);
+    }
+    observer.started(&RunStart {
+        algo: trainer.algo().name(),
+        terrain: experiment.terrain_at(start_iteration).1,
+        envs: experiment.train.envs,
+        steps_per_env: trainer.steps_per_env(),
+        threads,
+        run_dir: &run_dir,
+        forked_from: fork.as_deref().map(|c| (c, start_iteration)),
+    });
+    let started = Instant::now();
+    let mut phases_done = 0usize;
+    for iteration in start_iteration..total {
+        let (next_stage, terrain) = experiment.terrain_at(iteration);
+        let stage_rate = experiment.learning_rate_at(iteration);
+        if next_stage != stage {
+            let loggers = env.detach_loggers();
+            env = build_env(iteration)?;
+            for l in loggers {
+                env.attach_logger(l.env, l.logger);
+            }
+            stage = next_stage;
+            observer.stage_started(
+                stage,
+                terrain,
+                stage_rate,
+                &experiment.curriculum[stage].task_overrides,
+            );
+        }
+        // a stage's own learning rate (set every iteration, so a resume
+        // inside a stage runs as the uninterrupted run did)
+        if let Some(rate) = stage_rate {
+            trainer.set_learning_rate(rate)?;
+        }
+        for l in env.loggers_mut() {
+            l.logger.set_iteration(Some(iteration as i64));
+        }
+        // the state before this iteration, written if the run is stopped
+        // during it
+        let before = trainer.checkpoint_files()?;
+        let stats = trainer.iterate(&mut env)?;
+        if stop.load(Ordering::SeqCst) {
+            save_checkpoint(
+                &run_dir,
+                iteration,
+                before,
+                &config_text,
+                experiment.train.keep_checkpoints,
+            )?;
+            finish_loggers(&mut env, observer);
+            return Ok(TrainOutcome::Stopped {
+                iteration,
+                checkpoint: latest,
+            });
+        }
+        let logging_secs = env.take_logging_secs();
+        phases_done += stats.steps();
+        let record = metrics::record(&stats, terrain, logging_secs);
+        append_line(&metrics_path, &record.to_string())?;
+        let curves = metrics::curves(&stats);
+        for l in env.loggers_mut() {
+            l.logger.log_training(stats.iteration() as i64, &curves);
+            for warning in l.logger.take_warnings() {
+                observer.warning(&warning);
+            }
+        }
+        observer.iteration_done(&IterationReport {
+            stats: &stats,
+            record: &record,
+            total,
+            elapsed_secs: started.elapsed().as_secs_f64(),
+            phases_done,
+        })?;
+        let done = stats.iteration();
+        if done % experiment.train.checkpoint_every == 0 || done == total {
+            save_checkpoint(
+                &run_dir,
+                done,
+                trainer.checkpoint_files()?,
+                &config_text,
+                experiment.train.keep_checkpoints,
+            )?;
+        }
+    }
+    finish_loggers(&mut env, observer);
+    Ok(TrainOutcome::Completed {
+        iterations: total,
+        checkpoint: latest,
+    })
+}
+
+fn finish_loggers(env: &mut TaskEnv, observer: &mut dyn TrainObserver) {
+    for l in env.loggers_mut() {
+        l.logger.finish();
+        for warning in l.logger.take_warnings() {
+            observer.warning(&warning);
+        }
+    }
+}

@@ -1,0 +1,164 @@
+//! What a run needs before its first iteration: the experiment, the run
+//! directory, the learner (new, resumed or forked) and the thread count.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use learn::checkpoint::resolve_checkpoint;
+use learn::sac::SacAgent;
+use learn::{Algo, Learner, Trainer};
+use robot::RobotModel;
+use terrain_plugins::Registry;
+
+use super::run_dir::{CONFIG_FILE, METRICS_FILE, run_dir_of};
+use crate::config::Experiment;
+
+/// A run, resolved: [`super::train`] runs it.
+pub struct RunPlan {
+    /// the experiment, every setting resolved
+    pub experiment: Experiment,
+    /// where the run writes
+    pub run_dir: PathBuf,
+    /// the learner, at the iteration the run goes on from
+    pub learner: Learner,
+    /// threads stepping the worlds
+    pub threads: usize,
+    /// a fork: the checkpoint the run starts from
+    pub fork: Option<PathBuf>,
+}
+
+impl RunPlan {
+    /// A new run of `experiment` in `run_dir` (which must not hold a run),
+    /// from scratch or, with `fork`, from another run's checkpoint that
+    /// `experiment` reproduces.
+    pub fn fresh(
+        registry: &Registry,
+        experiment: Experiment,
+        run_dir: PathBuf,
+        model: &RobotModel,
+        threads: usize,
+        fork: Option<&Path>,
+    ) -> Result<Self> {
+        if run_dir.join(learn::checkpoint::LATEST_LINK).exists()
+            || run_dir.join(METRICS_FILE).exists()
+        {
+            bail!(
+                "run directory {} already holds a run: continue it with --resume {0}, or choose another --run-dir",
+                run_dir.display()
+            );
+        }
+        if model.joints.len() != 12 {
+            bail!(
+                "the robot has {} joints; training needs a 12-DoF quadruped",
+                model.joints.len()
+            );
+        }
+        if let Some(fork) = fork {
+            let (learner, checkpoint) = fork_from(fork, &experiment, registry)?;
+            return Ok(Self {
+                experiment,
+                run_dir,
+                learner,
+                threads,
+                fork: Some(checkpoint),
+            });
+        }
+        let (obs, actions, seed) = (
+            experiment.task.observation_size(),
+            robot::action::ACTION_SIZE,
+            experiment.train.seed,
+        );
+        let learner = match experiment.algo {
+            Algo::Ppo => Learner::Ppo(Box::new(Trainer::new(
+                experiment.ppo.clone(),
+                obs,
+                actions,
+                seed,
+            )?)),
+            Algo::Sac | Algo::CrossQ => Learner::Sac(Box::new(SacAgent::new(
+                experiment.sac.clone(),
+                obs,
+                actions,
+                seed,
+            )?)),
+        };
+        Ok(Self {
+            experiment,
+            run_dir,
+            learner,
+            threads,
+            fork: None,
+        })
+    }
+
+    /// Goes on with the run of `resume` (its directory or one of its
+    /// checkpoints) under its own `config.toml`; `iterations` raises the
+    /// total of a run without a curriculum.
+    pub fn resume(
+        registry: &Registry,
+        resume: &Path,
+        iterations: Option<u64>,
+        threads: usize,
+    ) -> Result<Self> {
+        let checkpoint =
+            resolve_checkpoint(resume).with_context(|| format!("--resume {}", resume.display()))?;
+        let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
+        let mut experiment = Experiment::from_file(&checkpoint.join(CONFIG_FILE), registry)?;
+        let learner =
+            Learner::load(&checkpoint).with_context(|| format!("--resume {}", resume.display()))?;
+        let run_dir = run_dir_of(&checkpoint).with_context(|| {
+            format!(
+                "--resume {}: the checkpoint is not inside a run directory (RUN/checkpoints/iter-N); \
+                 copy it there or train afresh",
+                resume.display()
+            )
+        })?;
+        if let Some(n) = iterations {
+            if !experiment.curriculum.is_empty() {
+                bail!(
+                    "--iterations cannot change a curriculum's length when resuming; to go on with more stages, --fork this run's checkpoint with a config that has them"
+                );
+            }
+            experiment.train.iterations = n;
+        }
+        Ok(Self {
+            experiment,
+            run_dir,
+            learner,
+            threads,
+            fork: None,
+        })
+    }
+}
+
+/// A fork's learner (a run directory means its latest checkpoint) and the
+/// checkpoint's path, once `experiment` is shown to train the checkpoint's
+/// iterations as its run did.
+fn fork_from(
+    fork: &Path,
+    experiment: &Experiment,
+    registry: &Registry,
+) -> Result<(Learner, PathBuf)> {
+    let context = || format!("--fork {}", fork.display());
+    let checkpoint = resolve_checkpoint(fork).with_context(context)?;
+    let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
+    let learner = Learner::load(&checkpoint).with_context(context)?;
+    let forked =
+        Experiment::from_file(&checkpoint.join(CONFIG_FILE), registry).with_context(context)?;
+    let done = learner.iteration();
+    if let Some(difference) = experiment.differs_before(&forked, done) {
+        bail!(
+            "--fork {}: the checkpoint's run trained its {done} iterations otherwise than this config would: {difference} (this config against the checkpoint's); a fork goes on only from a checkpoint that this config reproduces",
+            fork.display()
+        );
+    }
+    if done >= experiment.total_iterations() {
+        bail!(
+            "--fork {}: the checkpoint is at iteration {done}, and this config trains {} in all; nothing is left to train",
+            fork.display(),
+            experiment.total_iterations()
+        );
+    }
+    Ok((learner, checkpoint))
+}

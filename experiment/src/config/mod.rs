@@ -65,9 +65,23 @@ use anyhow::{Context, Result, anyhow, bail};
 use learn::sac::SacConfig;
 use learn::{Algo, PpoConfig};
 use robot::WorldConfig;
-use robot::task::{BalanceTerms, DistanceReward, TaskConfig};
+use robot::task::TaskConfig;
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
+
+mod curriculum;
+mod defaults;
+mod fork;
+mod terrain_table;
+mod train_settings;
+
+pub use curriculum::Stage;
+pub use defaults::{default_ppo, default_task};
+pub use train_settings::TrainSettings;
+
+use curriculum::curriculum_from_doc;
+use defaults::{overlay, resolve_task, sac_settings};
+use terrain_table::terrain_from_table;
 
 /// The sections an experiment file may have.
 const KNOWN_SECTIONS: [&str; 8] = [
@@ -105,66 +119,6 @@ pub struct Experiment {
     pub curriculum: Vec<Stage>,
 }
 
-/// `[train]`: how a training run is laid out.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct TrainSettings {
-    /// parallel environments (worlds)
-    pub envs: usize,
-    /// iterations (without a curriculum)
-    pub iterations: u64,
-    /// the run's seed: networks, sampling, start positions, terrain draws
-    pub seed: u64,
-    /// a checkpoint every this many iterations (and at the end, and on Ctrl-C)
-    pub checkpoint_every: u64,
-    /// checkpoints kept (the newest)
-    pub keep_checkpoints: usize,
-    /// environments whose rollouts go to Rerun
-    pub rerun_envs: Vec<usize>,
-}
-
-impl Default for TrainSettings {
-    fn default() -> Self {
-        Self {
-            envs: 16,
-            iterations: 100,
-            seed: 0,
-            checkpoint_every: 10,
-            keep_checkpoints: 5,
-            rerun_envs: vec![0],
-        }
-    }
-}
-
-impl TrainSettings {
-    /// Checks the values; the error names the key.
-    pub fn validate(&self) -> Result<()> {
-        if !(1..=4096).contains(&self.envs) {
-            bail!("train.envs = {}: must be in 1..=4096", self.envs);
-        }
-        if !(1..=10_000_000).contains(&self.iterations) {
-            bail!(
-                "train.iterations = {}: must be in 1..=10000000",
-                self.iterations
-            );
-        }
-        if self.checkpoint_every == 0 {
-            bail!("train.checkpoint_every = 0: must be at least 1");
-        }
-        if self.keep_checkpoints == 0 {
-            bail!("train.keep_checkpoints = 0: must be at least 1");
-        }
-        if let Some(bad) = self.rerun_envs.iter().find(|&&e| e >= self.envs) {
-            bail!(
-                "train.rerun_envs holds {bad}, but there are only {} environments (0..{})",
-                self.envs,
-                self.envs
-            );
-        }
-        Ok(())
-    }
-}
-
 /// The `[sac]` table as written. It takes no part in comparisons: two
 /// experiments are equal when their resolved settings (`Experiment::sac`)
 /// are, however the file spelled them.
@@ -177,101 +131,12 @@ impl PartialEq for SacTable {
     }
 }
 
-/// `base` with the values of `table` on top (keys `base` does not know are
-/// errors, through the type's `deny_unknown_fields`).
-fn overlay<T: Serialize + serde::de::DeserializeOwned>(
-    base: &T,
-    table: Option<&toml::Table>,
-) -> Result<T> {
-    let mut merged = match toml::Value::try_from(base)? {
-        toml::Value::Table(t) => t,
-        _ => bail!("settings do not serialise to a table"),
-    };
-    if let Some(table) = table {
-        for (key, value) in table {
-            merged.insert(key.clone(), value.clone());
-        }
-    }
-    toml::Value::Table(merged)
-        .try_into()
-        .map_err(|e: toml::de::Error| anyhow!("{}", e.message()))
-}
-
-/// The task settings where an experiment is silent: the paper's, but for
-/// the two reward choices with which PPO learns to walk here (docs/notebook/2026-11-30-policies-that-walk.md
-/// "Policies that walk"): R_d pays only for new ground (the paper's term
-/// pays for rocking, and a policy learned to rock), and the balance terms
-/// are penalties (the paper's pay ~0.8 per phase for standing still).
-/// `configs/tv2.toml` and the paper's other configs spell out the paper's
-/// values.
-pub fn default_task() -> TaskConfig {
-    TaskConfig {
-        distance_reward: DistanceReward::NewGround,
-        balance_terms: BalanceTerms::Penalty,
-        ..TaskConfig::default()
-    }
-}
-
-/// PPO where an experiment is silent: the paper's, but minibatches of 128
-/// (50 Adam steps per 640-phase iteration; the paper's 4096 makes one
-/// minibatch of 640, 10 steps).
-pub fn default_ppo() -> PpoConfig {
-    PpoConfig {
-        minibatch_size: 128,
-        ..PpoConfig::default()
-    }
-}
-
-/// The SAC settings for `algo`: its defaults ([`Algo::sac_defaults`]) with
-/// the `[sac]` table's values on top. `crossq` with `variant = "sac"` is a
-/// contradiction and an error.
-fn sac_settings(algo: Algo, table: Option<&toml::Table>) -> Result<SacConfig> {
-    let sac: SacConfig = overlay(&algo.sac_defaults(), table)?;
-    if algo == Algo::CrossQ && sac.variant != learn::sac::SacVariant::CrossQ {
-        bail!("variant = \"sac\" contradicts algo.name = \"crossq\"");
-    }
-    sac.validate()?;
-    Ok(sac)
-}
-
 /// `[algo]`: which learner trains.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct AlgoSection {
     name: String,
 }
-
-/// One curriculum stage.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Stage {
-    /// the terrain of this stage
-    pub terrain: TerrainSpec,
-    /// iterations in this stage
-    pub iterations: u64,
-    /// the learner's learning rate in this stage (`None`: the `[ppo]` or
-    /// `[sac]` one)
-    pub learning_rate: Option<f64>,
-    /// the stage's `[curriculum.task]` keys, as written (empty: none)
-    pub task_overrides: toml::Table,
-    /// the task of this stage: `[task]` with the overrides on top (`None`:
-    /// `[task]`'s)
-    pub task: Option<TaskConfig>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StageSection {
-    terrain: String,
-    iterations: u64,
-    #[serde(default)]
-    learning_rate: Option<f64>,
-    #[serde(default)]
-    task: Option<toml::Table>,
-}
-
-/// `[curriculum.task]` keys that would change the networks' input (the
-/// observation), which is fixed for a run.
-const FIXED_TASK_KEYS: [&str; 2] = ["observation", "action_prior"];
 
 impl Experiment {
     /// Reads an experiment file; its terrain specs are parsed with `registry`.
@@ -394,205 +259,6 @@ impl Experiment {
         }
     }
 
-    /// Total training iterations: the curriculum's sum, else `train.iterations`.
-    pub fn total_iterations(&self) -> u64 {
-        if self.curriculum.is_empty() {
-            self.train.iterations
-        } else {
-            self.curriculum.iter().map(|s| s.iterations).sum()
-        }
-    }
-
-    /// Keeps the first `iterations` iterations: the total without a
-    /// curriculum; with one, the stages up to that count, the last of them
-    /// cut short (`--iterations` of a new run). A curriculum is not
-    /// lengthened: the error names its total.
-    pub fn keep_first_iterations(&mut self, iterations: u64) -> Result<()> {
-        if self.curriculum.is_empty() {
-            self.train.iterations = iterations;
-            return Ok(());
-        }
-        let total = self.total_iterations();
-        if iterations > total {
-            bail!(
-                "--iterations {iterations}: the curriculum has {total} iterations in its stages; pass at most {total}, or add stages to a config"
-            );
-        }
-        let mut left = iterations;
-        self.curriculum.retain_mut(|stage| {
-            let keep = left > 0;
-            stage.iterations = stage.iterations.min(left);
-            left -= stage.iterations;
-            keep
-        });
-        Ok(())
-    }
-
-    /// The terrain of 0-based iteration `iteration`, and the stage index.
-    pub fn terrain_at(&self, iteration: u64) -> (usize, &TerrainSpec) {
-        let mut end = 0;
-        for (k, stage) in self.curriculum.iter().enumerate() {
-            end += stage.iterations;
-            if iteration < end {
-                return (k, &stage.terrain);
-            }
-        }
-        match self.curriculum.last() {
-            Some(last) => (self.curriculum.len() - 1, &last.terrain),
-            None => (0, &self.terrain),
-        }
-    }
-
-    /// The learning rate of 0-based iteration `iteration` when a curriculum
-    /// stage sets one: that stage's, or for a stage that does not, the
-    /// learner's configured rate. `None` when no stage sets one (the learner
-    /// keeps its own rate, which `[ppo] desired_kl` may move).
-    pub fn learning_rate_at(&self, iteration: u64) -> Option<f64> {
-        if self.curriculum.iter().all(|s| s.learning_rate.is_none()) {
-            return None;
-        }
-        let (stage, _) = self.terrain_at(iteration);
-        Some(
-            self.curriculum[stage]
-                .learning_rate
-                .unwrap_or(match self.algo {
-                    Algo::Ppo => self.ppo.learning_rate,
-                    Algo::Sac | Algo::CrossQ => self.sac.learning_rate,
-                }),
-        )
-    }
-
-    /// The task of 0-based iteration `iteration`: its curriculum stage's
-    /// when the stage sets `[curriculum.task]` keys, else `[task]`.
-    pub fn task_at(&self, iteration: u64) -> &TaskConfig {
-        if self.curriculum.is_empty() {
-            return &self.task;
-        }
-        let (stage, _) = self.terrain_at(iteration);
-        self.curriculum[stage].task.as_ref().unwrap_or(&self.task)
-    }
-
-    /// The learning rate iteration `iteration` trains at: the stage's, else
-    /// the learner's configured one; `None` where PPO's adaptive rate
-    /// (`desired_kl`) moves it.
-    fn effective_learning_rate_at(&self, iteration: u64) -> Option<f64> {
-        self.learning_rate_at(iteration).or(match self.algo {
-            Algo::Ppo if self.ppo.desired_kl.is_some() => None,
-            Algo::Ppo => Some(self.ppo.learning_rate),
-            Algo::Sac | Algo::CrossQ => Some(self.sac.learning_rate),
-        })
-    }
-
-    /// Where this experiment's first `iterations` iterations would differ
-    /// from `other`'s (`None`: they are the same training, so a checkpoint
-    /// of `other` at `iterations` is where this experiment would be too).
-    /// Compared: the learner and its settings, the physics, the number of
-    /// worlds and the seed, and for every iteration before `iterations` its
-    /// terrain, task and learning rate. Not compared: what does not change
-    /// the training (checkpoint cadence, Rerun environments, the stages'
-    /// layout beyond what each iteration runs).
-    pub fn differs_before(&self, other: &Experiment, iterations: u64) -> Option<String> {
-        if self.algo != other.algo {
-            return Some(format!(
-                "the learner: {} against {}",
-                self.algo.name(),
-                other.algo.name()
-            ));
-        }
-        match self.algo {
-            Algo::Ppo if self.ppo != other.ppo => {
-                return Some(format!(
-                    "the [ppo] settings: {}",
-                    debug_difference(&self.ppo, &other.ppo)
-                ));
-            }
-            Algo::Sac | Algo::CrossQ if self.sac != other.sac => {
-                return Some(format!(
-                    "the [sac] settings: {}",
-                    debug_difference(&self.sac, &other.sac)
-                ));
-            }
-            _ => {}
-        }
-        if self.physics != other.physics {
-            return Some(format!(
-                "the [physics] settings: {}",
-                debug_difference(&self.physics, &other.physics)
-            ));
-        }
-        if self.train.envs != other.train.envs {
-            return Some(format!(
-                "train.envs: {} against {}",
-                self.train.envs, other.train.envs
-            ));
-        }
-        if self.train.seed != other.train.seed {
-            return Some(format!(
-                "train.seed: {} against {}",
-                self.train.seed, other.train.seed
-            ));
-        }
-        // Each iteration's settings are constant between stage boundaries:
-        // check at 0 and at every boundary of either curriculum before
-        // `iterations`.
-        let boundaries = |e: &Experiment| {
-            e.curriculum
-                .iter()
-                .scan(0, |end, stage| {
-                    *end += stage.iterations;
-                    Some(*end)
-                })
-                .collect::<Vec<u64>>()
-        };
-        let mut starts: Vec<u64> = std::iter::once(0)
-            .chain(boundaries(self))
-            .chain(boundaries(other))
-            .filter(|&i| i < iterations)
-            .collect();
-        starts.sort_unstable();
-        starts.dedup();
-        for i in starts {
-            let (a, b) = (self.terrain_at(i).1, other.terrain_at(i).1);
-            if a != b {
-                return Some(format!("iteration {}'s terrain: {a} against {b}", i + 1));
-            }
-            if self.task_at(i) != other.task_at(i) {
-                return Some(format!(
-                    "iteration {}'s task: {}",
-                    i + 1,
-                    debug_difference(self.task_at(i), other.task_at(i))
-                ));
-            }
-            let (a, b) = (
-                self.effective_learning_rate_at(i),
-                other.effective_learning_rate_at(i),
-            );
-            if a != b {
-                let show = |r: Option<f64>| r.map_or("adaptive".to_string(), |r| format!("{r:e}"));
-                return Some(format!(
-                    "iteration {}'s learning rate: {} against {}",
-                    i + 1,
-                    show(a),
-                    show(b)
-                ));
-            }
-        }
-        None
-    }
-
-    /// Stage learning rates and PPO's adaptive rate exclude each other.
-    fn check_stage_rates(&self, source: &str) -> Result<()> {
-        if self.algo == Algo::Ppo
-            && self.ppo.desired_kl.is_some()
-            && self.curriculum.iter().any(|s| s.learning_rate.is_some())
-        {
-            bail!(
-                "{source}: [[curriculum]] stages set learning_rate and [ppo] sets desired_kl, which moves the rate itself; keep one of the two"
-            );
-        }
-        Ok(())
-    }
-
     /// The whole experiment as TOML, every value spelt out; parsing it
     /// gives this experiment back.
     pub fn to_toml(&self) -> String {
@@ -643,111 +309,6 @@ impl Experiment {
     }
 }
 
-/// The fields in which two values' `{:?}` texts differ, as "a against b"
-/// (`max_phases: 40 against max_phases: 1`).
-fn debug_difference(a: &impl std::fmt::Debug, b: &impl std::fmt::Debug) -> String {
-    let (a, b) = (format!("{a:?}"), format!("{b:?}"));
-    let fields = |text: &str| -> Vec<String> {
-        text.split(", ")
-            .map(|f| {
-                f.rsplit(" { ")
-                    .next()
-                    .unwrap_or(f)
-                    .trim_end_matches([' ', '}'])
-                    .to_string()
-            })
-            .collect()
-    };
-    let (fa, fb) = (fields(&a), fields(&b));
-    let only_a: Vec<&String> = fa.iter().filter(|f| !fb.contains(f)).collect();
-    let only_b: Vec<&String> = fb.iter().filter(|f| !fa.contains(f)).collect();
-    if only_a.is_empty() && only_b.is_empty() {
-        return format!("{a} against {b}");
-    }
-    let join = |v: Vec<&String>| v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ");
-    format!("{} against {}", join(only_a), join(only_b))
-}
-
-/// `[task]`'s table resolved over [`default_task`].
-fn resolve_task(table: &toml::Table) -> Result<TaskConfig, String> {
-    let task: TaskConfig = overlay(&default_task(), Some(table)).map_err(|e| e.to_string())?;
-    task.validate().map_err(|e| e.to_string())?;
-    Ok(task)
-}
-
-/// A stage's task: `[task]`'s keys with the stage's `[curriculum.task]`
-/// keys on top; keys that change the observation are refused.
-fn stage_task(task_table: &toml::Table, overrides: &toml::Table) -> Result<TaskConfig, String> {
-    if let Some(key) = FIXED_TASK_KEYS.iter().find(|k| overrides.contains_key(**k)) {
-        return Err(format!(
-            "{key} cannot change between stages (it sets the networks' input); set it in [task]"
-        ));
-    }
-    let mut merged = task_table.clone();
-    for (key, value) in overrides {
-        merged.insert(key.clone(), value.clone());
-    }
-    resolve_task(&merged)
-}
-
-/// Reads `[[curriculum]]` (the stages' tasks over `task_table`, the
-/// `[task]` section); `source` names the file in errors.
-fn curriculum_from_doc(
-    doc: &toml::Table,
-    task_table: &toml::Table,
-    source: &str,
-    registry: &Registry,
-) -> Result<Vec<Stage>> {
-    let Some(value) = doc.get("curriculum") else {
-        return Ok(Vec::new());
-    };
-    let stages: Vec<StageSection> = value.clone().try_into().map_err(|e: toml::de::Error| {
-        anyhow!(
-            "config {source} [[curriculum]]: {} (each stage needs terrain = \"SPEC\" and iterations = N)",
-            e.message()
-        )
-    })?;
-    if stages.is_empty() {
-        bail!("config {source} [[curriculum]]: no stages");
-    }
-    stages
-        .into_iter()
-        .enumerate()
-        .map(|(k, stage)| {
-            if stage.iterations == 0 {
-                bail!(
-                    "config {source} [[curriculum]] stage {}: iterations must be at least 1",
-                    k + 1
-                );
-            }
-            if let Some(rate) = stage.learning_rate {
-                learn::optim::check_learning_rate(rate)
-                    .map_err(|e| anyhow!("config {source} [[curriculum]] stage {}: {e}", k + 1))?;
-            }
-            let task_overrides = stage.task.unwrap_or_default();
-            let task = if task_overrides.is_empty() {
-                None
-            } else {
-                Some(stage_task(task_table, &task_overrides).map_err(|e| {
-                    anyhow!(
-                        "config {source} [[curriculum]] stage {} [curriculum.task]: {e}",
-                        k + 1
-                    )
-                })?)
-            };
-            Ok(Stage {
-                terrain: registry
-                    .parse(&stage.terrain)
-                    .with_context(|| format!("config {source} [[curriculum]] stage {}", k + 1))?,
-                iterations: stage.iterations,
-                learning_rate: stage.learning_rate,
-                task_overrides,
-                task,
-            })
-        })
-        .collect()
-}
-
 /// The `[physics]` table's keys and values for `physics` (without the
 /// header): every key spelt out, in the order an experiment file lists them.
 pub fn physics_toml(physics: &WorldConfig) -> String {
@@ -759,77 +320,19 @@ pub fn physics_json(physics: &WorldConfig) -> serde_json::Value {
     serde_json::to_value(physics).expect("physics settings serialise")
 }
 
-/// Reads the `[terrain]` section of a parsed file; `source` names it in errors.
-fn terrain_from_table(doc: &toml::Table, source: &str, registry: &Registry) -> Result<TerrainSpec> {
-    let section = doc
-        .get("terrain")
-        .ok_or_else(|| anyhow!("config {source}: no [terrain] section"))?;
-    let table = section
-        .as_table()
-        .ok_or_else(|| anyhow!("config {source}: terrain must be a table ([terrain])"))?;
-    let name = format!("{source} [terrain]");
-    match (table.get("spec"), table.get("plugin")) {
-        (Some(_), Some(_)) => bail!(
-            "config {name}: give either spec = \"...\" or plugin = \"...\" with its parameters, not both"
-        ),
-        (Some(spec), None) => {
-            if table.len() > 1 {
-                let extra: Vec<&String> = table.keys().filter(|k| *k != "spec").collect();
-                bail!(
-                    "config {name}: with spec = \"...\" no other keys are allowed, found {extra:?}"
-                );
-            }
-            let spec = spec.as_str().ok_or_else(|| {
-                anyhow!("config {name}: spec must be a string such as \"elastic:5cm\"")
-            })?;
-            Ok(registry
-                .parse(spec)
-                .with_context(|| format!("config {name}"))?)
-        }
-        (None, Some(plugin)) => {
-            let plugin = plugin.as_str().ok_or_else(|| {
-                anyhow!("config {name}: plugin must be a string such as \"elastic\"")
-            })?;
-            let mut entries = Vec::new();
-            for (key, value) in table.iter().filter(|(k, _)| *k != "plugin") {
-                entries.push((
-                    key.clone(),
-                    value_text(value).with_context(|| format!("config {name}: key {key}"))?,
-                ));
-            }
-            Ok(registry.parse_table(&name, plugin, &entries)?)
-        }
-        (None, None) => bail!("config {name}: needs spec = \"...\" or plugin = \"...\""),
+#[cfg(test)]
+impl Experiment {
+    /// [`Experiment::from_toml`] with the built-in terrains.
+    pub(crate) fn from_toml_builtin(text: &str, source: &str) -> Result<Self> {
+        Self::from_toml(text, source, &Registry::builtin())
     }
-}
-
-/// A TOML value as the text the spec grammar reads.
-fn value_text(value: &toml::Value) -> Result<String> {
-    Ok(match value {
-        toml::Value::String(s) => s.clone(),
-        toml::Value::Integer(i) => i.to_string(),
-        toml::Value::Float(f) => f.to_string(),
-        toml::Value::Array(items) => items
-            .iter()
-            .map(value_text)
-            .collect::<Result<Vec<_>>>()?
-            .join(","),
-        other => bail!("{} is not a string, number or list", other.type_str()),
-    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use robot::PdModel;
-    use robot::task::ActionPrior;
-
-    impl Experiment {
-        /// [`Experiment::from_toml`] with the built-in terrains.
-        fn from_toml_builtin(text: &str, source: &str) -> Result<Self> {
-            Self::from_toml(text, source, &Registry::builtin())
-        }
-    }
+    use robot::task::{ActionPrior, BalanceTerms, DistanceReward};
 
     fn terrain_from_toml(text: &str, source: &str) -> Result<TerrainSpec> {
         Experiment::from_toml_builtin(text, source).map(|e| e.terrain)

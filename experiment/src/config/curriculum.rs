@@ -1,0 +1,221 @@
+//! `[[curriculum]]`: stages in order, each with its terrain, iterations and
+//! optionally its learning rate and `[curriculum.task]` keys; and what an
+//! experiment trains at a given iteration.
+
+use anyhow::{Context, Result, anyhow, bail};
+use learn::Algo;
+use robot::task::TaskConfig;
+use serde::Deserialize;
+use terrain_plugins::{Registry, TerrainSpec};
+
+use super::Experiment;
+use super::defaults::resolve_task;
+
+/// One curriculum stage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stage {
+    /// the terrain of this stage
+    pub terrain: TerrainSpec,
+    /// iterations in this stage
+    pub iterations: u64,
+    /// the learner's learning rate in this stage (`None`: the `[ppo]` or
+    /// `[sac]` one)
+    pub learning_rate: Option<f64>,
+    /// the stage's `[curriculum.task]` keys, as written (empty: none)
+    pub task_overrides: toml::Table,
+    /// the task of this stage: `[task]` with the overrides on top (`None`:
+    /// `[task]`'s)
+    pub task: Option<TaskConfig>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StageSection {
+    terrain: String,
+    iterations: u64,
+    #[serde(default)]
+    learning_rate: Option<f64>,
+    #[serde(default)]
+    task: Option<toml::Table>,
+}
+
+/// `[curriculum.task]` keys that would change the networks' input (the
+/// observation), which is fixed for a run.
+const FIXED_TASK_KEYS: [&str; 2] = ["observation", "action_prior"];
+
+impl Experiment {
+    /// Total training iterations: the curriculum's sum, else `train.iterations`.
+    pub fn total_iterations(&self) -> u64 {
+        if self.curriculum.is_empty() {
+            self.train.iterations
+        } else {
+            self.curriculum.iter().map(|s| s.iterations).sum()
+        }
+    }
+
+    /// Keeps the first `iterations` iterations: the total without a
+    /// curriculum; with one, the stages up to that count, the last of them
+    /// cut short (`--iterations` of a new run). A curriculum is not
+    /// lengthened: the error names its total.
+    pub fn keep_first_iterations(&mut self, iterations: u64) -> Result<()> {
+        if self.curriculum.is_empty() {
+            self.train.iterations = iterations;
+            return Ok(());
+        }
+        let total = self.total_iterations();
+        if iterations > total {
+            bail!(
+                "--iterations {iterations}: the curriculum has {total} iterations in its stages; pass at most {total}, or add stages to a config"
+            );
+        }
+        let mut left = iterations;
+        self.curriculum.retain_mut(|stage| {
+            let keep = left > 0;
+            stage.iterations = stage.iterations.min(left);
+            left -= stage.iterations;
+            keep
+        });
+        Ok(())
+    }
+
+    /// The terrain of 0-based iteration `iteration`, and the stage index.
+    pub fn terrain_at(&self, iteration: u64) -> (usize, &TerrainSpec) {
+        let mut end = 0;
+        for (k, stage) in self.curriculum.iter().enumerate() {
+            end += stage.iterations;
+            if iteration < end {
+                return (k, &stage.terrain);
+            }
+        }
+        match self.curriculum.last() {
+            Some(last) => (self.curriculum.len() - 1, &last.terrain),
+            None => (0, &self.terrain),
+        }
+    }
+
+    /// The learning rate of 0-based iteration `iteration` when a curriculum
+    /// stage sets one: that stage's, or for a stage that does not, the
+    /// learner's configured rate. `None` when no stage sets one (the learner
+    /// keeps its own rate, which `[ppo] desired_kl` may move).
+    pub fn learning_rate_at(&self, iteration: u64) -> Option<f64> {
+        if self.curriculum.iter().all(|s| s.learning_rate.is_none()) {
+            return None;
+        }
+        let (stage, _) = self.terrain_at(iteration);
+        Some(
+            self.curriculum[stage]
+                .learning_rate
+                .unwrap_or(match self.algo {
+                    Algo::Ppo => self.ppo.learning_rate,
+                    Algo::Sac | Algo::CrossQ => self.sac.learning_rate,
+                }),
+        )
+    }
+
+    /// The task of 0-based iteration `iteration`: its curriculum stage's
+    /// when the stage sets `[curriculum.task]` keys, else `[task]`.
+    pub fn task_at(&self, iteration: u64) -> &TaskConfig {
+        if self.curriculum.is_empty() {
+            return &self.task;
+        }
+        let (stage, _) = self.terrain_at(iteration);
+        self.curriculum[stage].task.as_ref().unwrap_or(&self.task)
+    }
+
+    /// The learning rate iteration `iteration` trains at: the stage's, else
+    /// the learner's configured one; `None` where PPO's adaptive rate
+    /// (`desired_kl`) moves it.
+    pub(super) fn effective_learning_rate_at(&self, iteration: u64) -> Option<f64> {
+        self.learning_rate_at(iteration).or(match self.algo {
+            Algo::Ppo if self.ppo.desired_kl.is_some() => None,
+            Algo::Ppo => Some(self.ppo.learning_rate),
+            Algo::Sac | Algo::CrossQ => Some(self.sac.learning_rate),
+        })
+    }
+
+    /// Stage learning rates and PPO's adaptive rate exclude each other.
+    pub(super) fn check_stage_rates(&self, source: &str) -> Result<()> {
+        if self.algo == Algo::Ppo
+            && self.ppo.desired_kl.is_some()
+            && self.curriculum.iter().any(|s| s.learning_rate.is_some())
+        {
+            bail!(
+                "{source}: [[curriculum]] stages set learning_rate and [ppo] sets desired_kl, which moves the rate itself; keep one of the two"
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A stage's task: `[task]`'s keys with the stage's `[curriculum.task]`
+/// keys on top; keys that change the observation are refused.
+fn stage_task(task_table: &toml::Table, overrides: &toml::Table) -> Result<TaskConfig, String> {
+    if let Some(key) = FIXED_TASK_KEYS.iter().find(|k| overrides.contains_key(**k)) {
+        return Err(format!(
+            "{key} cannot change between stages (it sets the networks' input); set it in [task]"
+        ));
+    }
+    let mut merged = task_table.clone();
+    for (key, value) in overrides {
+        merged.insert(key.clone(), value.clone());
+    }
+    resolve_task(&merged)
+}
+
+/// Reads `[[curriculum]]` (the stages' tasks over `task_table`, the
+/// `[task]` section); `source` names the file in errors.
+pub(super) fn curriculum_from_doc(
+    doc: &toml::Table,
+    task_table: &toml::Table,
+    source: &str,
+    registry: &Registry,
+) -> Result<Vec<Stage>> {
+    let Some(value) = doc.get("curriculum") else {
+        return Ok(Vec::new());
+    };
+    let stages: Vec<StageSection> = value.clone().try_into().map_err(|e: toml::de::Error| {
+        anyhow!(
+            "config {source} [[curriculum]]: {} (each stage needs terrain = \"SPEC\" and iterations = N)",
+            e.message()
+        )
+    })?;
+    if stages.is_empty() {
+        bail!("config {source} [[curriculum]]: no stages");
+    }
+    stages
+        .into_iter()
+        .enumerate()
+        .map(|(k, stage)| {
+            if stage.iterations == 0 {
+                bail!(
+                    "config {source} [[curriculum]] stage {}: iterations must be at least 1",
+                    k + 1
+                );
+            }
+            if let Some(rate) = stage.learning_rate {
+                learn::optim::check_learning_rate(rate)
+                    .map_err(|e| anyhow!("config {source} [[curriculum]] stage {}: {e}", k + 1))?;
+            }
+            let task_overrides = stage.task.unwrap_or_default();
+            let task = if task_overrides.is_empty() {
+                None
+            } else {
+                Some(stage_task(task_table, &task_overrides).map_err(|e| {
+                    anyhow!(
+                        "config {source} [[curriculum]] stage {} [curriculum.task]: {e}",
+                        k + 1
+                    )
+                })?)
+            };
+            Ok(Stage {
+                terrain: registry
+                    .parse(&stage.terrain)
+                    .with_context(|| format!("config {source} [[curriculum]] stage {}", k + 1))?,
+                iterations: stage.iterations,
+                learning_rate: stage.learning_rate,
+                task_overrides,
+                task,
+            })
+        })
+        .collect()
+}

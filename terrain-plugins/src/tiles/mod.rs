@@ -29,14 +29,18 @@
 //! columns run along x from `-back` to `length - back`, rows across a width
 //! centred on y = 0.
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+mod layout;
+mod params;
+
 use rapier3d::prelude::*;
 
-use crate::relief::{HeightGrid, RegionRelief};
+use layout::{FieldLayout, RegionModel};
+pub use layout::{RegionLayout, TileSpring};
+pub use params::{DEFAULT_LENGTH_M, TileParams, friction_decl, tile_param_decls};
+
+use crate::relief::RegionRelief;
 use crate::soil::SoilModel;
-use crate::spec::{Ground, ParamDecl, ParamKind, ParamValue, Surface, TerrainSpec};
-use crate::units::format_length;
+use crate::spec::TerrainSpec;
 use crate::{BuildContext, GroundMesh, Rect, Region, Terrain, TileState, terrain_collider};
 
 /// Thickness of a tile, metres.
@@ -47,224 +51,6 @@ pub const TILE_THICKNESS_M: f64 = 0.05;
 /// `CoefficientCombineRule::Min`), so a terrain's `friction=<mu>` is the
 /// contact's coefficient.
 pub const GROUND_FRICTION: f32 = 1.0;
-/// Default extent of a field along x (its `length`), metres: room for 400
-/// phases (`quadwalk eval`'s default episode) of a 5 cm-per-phase gait from
-/// the start (the tiles end at x = 38 m). A 20 m field, the default until
-/// 2026-12-01, ended at x = 18 m under a walking policy's 365th phase; past the
-/// tiles the ground is the fixed base, 20 cm down, and the robot falls there.
-pub const DEFAULT_LENGTH_M: f64 = 40.0;
-
-/// Seed offset between the height draws of rough regions.
-const ROUGH_REGION_STRIDE: u64 = 0x9e37_79b9_7f4a_7c15;
-/// Stream of the per-tile depth draw (mixed into the build seed).
-const TILE_DEPTH_STREAM: u64 = 0x7469_6c65_2d64_6570;
-
-/// The optional `friction` parameter of every built-in terrain but
-/// `varying`'s regions' own (see [`GROUND_FRICTION`]).
-pub fn friction_decl() -> ParamDecl {
-    ParamDecl::optional(
-        "friction",
-        ParamKind::Number,
-        ParamValue::Number(f64::from(GROUND_FRICTION)),
-        "friction coefficient of the ground (the contact's, min with the robot's 1.0), default 1",
-    )
-}
-
-/// The optional parameters every tiled terrain takes, with their defaults.
-pub fn tile_param_decls() -> Vec<ParamDecl> {
-    use ParamKind::*;
-    use ParamValue as V;
-    vec![
-        ParamDecl::optional(
-            "tile",
-            Length,
-            V::Length(0.2),
-            "distance between tile centres (pitch), default 20cm",
-        ),
-        ParamDecl::optional(
-            "gap",
-            Length,
-            V::Length(0.002),
-            "gap between neighbouring tiles, default 2mm",
-        ),
-        ParamDecl::optional(
-            "travel",
-            Length,
-            V::Length(0.15),
-            "how far a tile can sink, default 15cm",
-        ),
-        ParamDecl::optional(
-            "damping",
-            Number,
-            V::Number(0.5),
-            "damping ratio of a loaded tile, default 0.5",
-        ),
-        ParamDecl::optional(
-            "tile_mass",
-            Mass,
-            V::Mass(0.5),
-            "mass of one tile, default 0.5kg",
-        ),
-        friction_decl(),
-        ParamDecl::optional(
-            "length",
-            Length,
-            V::Length(DEFAULT_LENGTH_M),
-            "extent along x (walking direction), default 40m",
-        ),
-        ParamDecl::optional(
-            "back",
-            Length,
-            V::Length(2.0),
-            "how far the tiles reach behind x = 0, default 2m",
-        ),
-        ParamDecl::optional(
-            "width",
-            Length,
-            V::Length(3.0),
-            "extent across (y), centred on y = 0, default 3m",
-        ),
-    ]
-}
-
-/// Tile-field parameters in SI units.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TileParams {
-    /// distance between tile centres, m
-    pub pitch_m: f64,
-    /// gap between neighbouring tiles, m
-    pub gap_m: f64,
-    /// maximum sink, m
-    pub travel_m: f64,
-    /// damping ratio of a loaded tile
-    pub damping_ratio: f64,
-    /// mass of one tile, kg
-    pub tile_mass_kg: f64,
-    /// friction coefficient of the tiles and the ground
-    pub friction: f64,
-    /// extent along x, m
-    pub length_m: f64,
-    /// extent behind x = 0, m
-    pub back_m: f64,
-    /// extent across, m
-    pub width_m: f64,
-}
-
-impl TileParams {
-    /// Reads the parameters declared by [`tile_param_decls`].
-    pub fn from_spec(spec: &TerrainSpec) -> Self {
-        Self {
-            pitch_m: spec.length_m("tile"),
-            gap_m: spec.length_m("gap"),
-            travel_m: spec.length_m("travel"),
-            damping_ratio: spec.number("damping"),
-            tile_mass_kg: spec.mass_kg("tile_mass"),
-            friction: spec.number("friction"),
-            length_m: spec.length_m("length"),
-            back_m: spec.length_m("back"),
-            width_m: spec.length_m("width"),
-        }
-    }
-
-    /// Checks the relations between the parameters and the given depths.
-    pub fn validate(&self, depths_m: impl IntoIterator<Item = f64>) -> Result<(), String> {
-        if self.gap_m >= self.pitch_m {
-            return Err(format!(
-                "gap {} must be smaller than the tile pitch {}",
-                format_length(self.gap_m),
-                format_length(self.pitch_m)
-            ));
-        }
-        if self.length_m < self.pitch_m || self.width_m < self.pitch_m {
-            return Err(format!(
-                "length and width must hold at least one tile of {}",
-                format_length(self.pitch_m)
-            ));
-        }
-        if self.back_m >= self.length_m {
-            return Err(format!(
-                "back {} must be shorter than the length {}",
-                format_length(self.back_m),
-                format_length(self.length_m)
-            ));
-        }
-        let tiles = (self.length_m / self.pitch_m).round() * (self.width_m / self.pitch_m).round();
-        if tiles > 200_000.0 {
-            return Err(format!(
-                "{tiles} tiles is more than the 200000 a world may hold; use fewer or larger tiles"
-            ));
-        }
-        for depth_m in depths_m {
-            if depth_m > self.travel_m {
-                return Err(format!(
-                    "depth {} is beyond the tile travel {} (raise travel=...)",
-                    format_length(depth_m),
-                    format_length(self.travel_m)
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// Spring stiffness (N/m) for a sinking depth under `ctx`'s standing robot.
-    pub fn stiffness_n_per_m(depth_m: f64, ctx: &BuildContext) -> f64 {
-        ctx.supported_mass_kg * ctx.gravity_m_per_s2 / (4.0 * depth_m)
-    }
-
-    /// Spring damping (N s/m) for a stiffness, see the module docs.
-    pub fn damping_n_s_per_m(&self, stiffness_n_per_m: f64, ctx: &BuildContext) -> f64 {
-        let loaded_mass_kg = self.tile_mass_kg + ctx.supported_mass_kg / 4.0;
-        2.0 * self.damping_ratio * (stiffness_n_per_m * loaded_mass_kg).sqrt()
-    }
-}
-
-/// How the tile field's columns are grouped into regions.
-#[derive(Debug, Clone, PartialEq)]
-pub enum RegionLayout {
-    /// One surface everywhere.
-    Uniform(Surface),
-    /// The surface changes every `every_m` along x: the region around the
-    /// start (x < every) takes the first surface of the list, each later one
-    /// a surface drawn uniformly from the whole list with the build seed.
-    Varying {
-        /// region length along x, m
-        every_m: f64,
-        /// surfaces to draw from; the first is the starting one
-        surfaces: Vec<Surface>,
-    },
-}
-
-/// How the tiles of one region respond to load.
-#[derive(Debug, Clone)]
-enum RegionModel {
-    /// no tiles: a solid block
-    Rigid,
-    /// every tile on the same spring
-    Elastic {
-        stiffness_n_per_m: f64,
-        damping_n_s_per_m: f64,
-    },
-    /// each tile its own depth, drawn in [min, max]
-    ElasticRange { min_depth_m: f64, max_depth_m: f64 },
-    /// elasto-plastic tiles
-    Soil {
-        model: SoilModel,
-        damping_n_s_per_m: f64,
-    },
-    /// no tiles: rigid relief, rough, a hill or stairs
-    Relief(RegionRelief),
-}
-
-/// One tile's spring, fixed when the terrain is laid out.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TileSpring {
-    /// the depth the tile sinks under a quarter of the standing robot, m
-    pub depth_m: f64,
-    /// N/m
-    pub stiffness_n_per_m: f64,
-    /// N s/m
-    pub damping_n_s_per_m: f64,
-}
 
 /// A built tile.
 #[derive(Debug, Clone, Copy)]
@@ -283,17 +69,8 @@ pub struct TiledTerrain {
     spec: TerrainSpec,
     params: TileParams,
     ctx: BuildContext,
-    regions: Vec<Region>,
-    models: Vec<RegionModel>,
-    /// each region's friction coefficient
-    frictions: Vec<f64>,
-    /// one entry per cell, row-major by column: `None` for rigid cells
-    cell_springs: Vec<Option<TileSpring>>,
-    /// region index of each column
-    column_region: Vec<usize>,
-    columns: usize,
-    rows: usize,
-    first_center_m: [f64; 2],
+    /// where every region, cell and spring lies (pure, no rapier)
+    layout: FieldLayout,
     /// one entry per cell, row-major by column: `None` for rigid cells
     tiles: Vec<Option<Tile>>,
     /// indices in `tiles` of the soil tiles
@@ -304,208 +81,19 @@ pub struct TiledTerrain {
 }
 
 impl TiledTerrain {
-    /// Lays out the field; bodies are inserted by [`Terrain::build`].
+    /// Lays out the field ([`FieldLayout`]); bodies are inserted by
+    /// [`Terrain::build`].
     pub fn new(
         spec: TerrainSpec,
         params: TileParams,
         layout: RegionLayout,
         ctx: &BuildContext,
     ) -> Self {
-        let pitch = params.pitch_m;
-        let columns = ((params.length_m / pitch).round() as usize).max(1);
-        let rows = ((params.width_m / pitch).round() as usize).max(1);
-        let first_x = (pitch * ((-params.back_m + pitch / 2.0) / pitch).round()).min(0.0);
-        let first_y = -(rows as f64 - 1.0) * pitch / 2.0;
-        let column_x = |ix: usize| first_x + ix as f64 * pitch;
-
-        // Which region each column is in, and each region's surface.
-        let mut region_surfaces: Vec<Surface> = Vec::new();
-        let mut column_region = Vec::with_capacity(columns);
-        match &layout {
-            RegionLayout::Uniform(surface) => {
-                region_surfaces.push(*surface);
-                column_region.resize(columns, 0);
-            }
-            RegionLayout::Varying { every_m, surfaces } => {
-                let mut rng = ChaCha8Rng::seed_from_u64(ctx.seed);
-                for ix in 0..columns {
-                    // Region r holds the columns whose centre lies in [r every, (r+1) every);
-                    // columns behind x = 0 belong to region 0.
-                    let r = (column_x(ix) / every_m).floor().max(0.0) as usize;
-                    while region_surfaces.len() <= r {
-                        let surface = if region_surfaces.is_empty() {
-                            surfaces[0]
-                        } else {
-                            surfaces[rng.random_range(0..surfaces.len())]
-                        };
-                        region_surfaces.push(surface);
-                    }
-                    column_region.push(r);
-                }
-            }
-        }
-
-        let half = pitch / 2.0;
-        let mut regions = Vec::new();
-        let mut models = Vec::new();
-        let half_width_m = rows as f64 * pitch / 2.0;
-        let frictions: Vec<f64> = region_surfaces
-            .iter()
-            .map(|s| s.friction.unwrap_or(params.friction))
-            .collect();
-        for (index, surface) in region_surfaces.iter().enumerate() {
-            let first = column_region.iter().position(|&r| r == index).unwrap_or(0);
-            let last = column_region.iter().rposition(|&r| r == index).unwrap_or(0);
-            let x_range_m = (column_x(first) - half, column_x(last) + half);
-            let spring_at = |depth_m: f64| {
-                let k = TileParams::stiffness_n_per_m(depth_m, ctx);
-                (k, params.damping_n_s_per_m(k, ctx))
-            };
-            // What `terrain show` reports: for a range, the springs of its
-            // middle depth.
-            let (label, model, reported, expected_sink_m) = match surface.ground {
-                Ground::Rigid => (surface.label(), RegionModel::Rigid, None, 0.0),
-                Ground::Rough {
-                    amplitude_m,
-                    cell_m,
-                } => {
-                    // each rough region its own draw
-                    let seed = ctx
-                        .seed
-                        .wrapping_add((index as u64 + 1).wrapping_mul(ROUGH_REGION_STRIDE));
-                    let grid = HeightGrid::random(
-                        x_range_m,
-                        (-half_width_m, half_width_m),
-                        cell_m,
-                        amplitude_m,
-                        seed,
-                    );
-                    let model = RegionModel::Relief(RegionRelief::Grid(grid));
-                    (surface.label(), model, None, 0.0)
-                }
-                Ground::Slope { degrees } => {
-                    let model = RegionModel::Relief(RegionRelief::Hill {
-                        x_m: x_range_m,
-                        y_m: (-half_width_m, half_width_m),
-                        tan: degrees.to_radians().tan(),
-                    });
-                    (surface.label(), model, None, 0.0)
-                }
-                Ground::Steps { height_m, length_m } => {
-                    let model = RegionModel::Relief(RegionRelief::Stairs {
-                        x_m: x_range_m,
-                        y_m: (-half_width_m, half_width_m),
-                        height_m,
-                        length_m,
-                    });
-                    (surface.label(), model, None, 0.0)
-                }
-                Ground::Elastic { depth_m } => {
-                    let (k, c) = spring_at(depth_m);
-                    (
-                        surface.label(),
-                        RegionModel::Elastic {
-                            stiffness_n_per_m: k,
-                            damping_n_s_per_m: c,
-                        },
-                        Some((k, c)),
-                        depth_m,
-                    )
-                }
-                Ground::ElasticRange {
-                    min_depth_m,
-                    max_depth_m,
-                } => {
-                    let middle_m = (min_depth_m + max_depth_m) / 2.0;
-                    (
-                        surface.label(),
-                        RegionModel::ElasticRange {
-                            min_depth_m,
-                            max_depth_m,
-                        },
-                        Some(spring_at(middle_m)),
-                        middle_m,
-                    )
-                }
-                Ground::Soil(soil) => {
-                    let model = soil.model(ctx);
-                    let c = params.damping_n_s_per_m(model.reload_stiffness_n_per_m, ctx);
-                    (
-                        surface.label(),
-                        RegionModel::Soil {
-                            model,
-                            damping_n_s_per_m: c,
-                        },
-                        Some((model.reload_stiffness_n_per_m, c)),
-                        soil.depth_m,
-                    )
-                }
-            };
-            regions.push(Region {
-                index,
-                label,
-                x_range_m,
-                stiffness_n_per_m: reported.map(|(k, _)| k),
-                damping_n_s_per_m: reported.map(|(_, c)| c),
-                expected_sink_m,
-            });
-            models.push(model);
-        }
-
-        // Each cell's spring; a depth range draws one per tile, in cell
-        // order, from the build seed (its own stream, apart from the
-        // region draw).
-        let mut depth_rng = ChaCha8Rng::seed_from_u64(ctx.seed ^ TILE_DEPTH_STREAM);
-        let mut cell_springs = Vec::with_capacity(columns * rows);
-        for &region in &column_region {
-            for _ in 0..rows {
-                let spring = match models[region] {
-                    RegionModel::Rigid | RegionModel::Relief(_) => None,
-                    RegionModel::Elastic {
-                        stiffness_n_per_m,
-                        damping_n_s_per_m,
-                    } => Some(TileSpring {
-                        depth_m: regions[region].expected_sink_m,
-                        stiffness_n_per_m,
-                        damping_n_s_per_m,
-                    }),
-                    RegionModel::ElasticRange {
-                        min_depth_m,
-                        max_depth_m,
-                    } => {
-                        let depth_m = depth_rng.random_range(min_depth_m..=max_depth_m);
-                        let k = TileParams::stiffness_n_per_m(depth_m, ctx);
-                        Some(TileSpring {
-                            depth_m,
-                            stiffness_n_per_m: k,
-                            damping_n_s_per_m: params.damping_n_s_per_m(k, ctx),
-                        })
-                    }
-                    RegionModel::Soil {
-                        model,
-                        damping_n_s_per_m,
-                    } => Some(TileSpring {
-                        depth_m: regions[region].expected_sink_m,
-                        stiffness_n_per_m: model.reload_stiffness_n_per_m,
-                        damping_n_s_per_m,
-                    }),
-                };
-                cell_springs.push(spring);
-            }
-        }
-
         Self {
             spec,
             params,
             ctx: ctx.clone(),
-            regions,
-            models,
-            frictions,
-            cell_springs,
-            column_region,
-            columns,
-            rows,
-            first_center_m: [first_x, first_y],
+            layout: FieldLayout::new(&params, &layout, ctx),
             tiles: Vec::new(),
             soil_tiles: Vec::new(),
             built: false,
@@ -515,17 +103,17 @@ impl TiledTerrain {
 
     fn center_m(&self, ix: usize, iy: usize) -> [f64; 2] {
         [
-            self.first_center_m[0] + ix as f64 * self.params.pitch_m,
-            self.first_center_m[1] + iy as f64 * self.params.pitch_m,
+            self.layout.first_center_m[0] + ix as f64 * self.params.pitch_m,
+            self.layout.first_center_m[1] + iy as f64 * self.params.pitch_m,
         ]
     }
 
     /// The cell (column, row) whose square holds (x, y), if any.
     fn cell_at(&self, x_m: f64, y_m: f64) -> Option<(usize, usize)> {
-        let fx = ((x_m - self.first_center_m[0]) / self.params.pitch_m).round();
-        let fy = ((y_m - self.first_center_m[1]) / self.params.pitch_m).round();
+        let fx = ((x_m - self.layout.first_center_m[0]) / self.params.pitch_m).round();
+        let fy = ((y_m - self.layout.first_center_m[1]) / self.params.pitch_m).round();
         let in_range = |f: f64, n: usize| f >= 0.0 && f < n as f64;
-        (in_range(fx, self.columns) && in_range(fy, self.rows))
+        (in_range(fx, self.layout.columns) && in_range(fy, self.layout.rows))
             .then_some((fx as usize, fy as usize))
     }
 
@@ -537,7 +125,7 @@ impl TiledTerrain {
     /// Each cell's spring (row-major by column, `None` for rigid cells): the
     /// depths a range drew, for inspection and tests.
     pub fn cell_springs(&self) -> &[Option<TileSpring>] {
-        &self.cell_springs
+        &self.layout.cell_springs
     }
 
     fn tile_sink_m(&self, world: &PhysicsWorld, handle: RigidBodyHandle) -> f64 {
@@ -567,7 +155,7 @@ impl TiledTerrain {
         let Some(body) = world.bodies.get_mut(handle) else {
             return;
         };
-        let [cx, cy] = self.center_m(index / self.rows, index % self.rows);
+        let [cx, cy] = self.center_m(index / self.layout.rows, index % self.layout.rows);
         body.set_translation(
             Vector::new(cx as f32, cy as f32, (-TILE_THICKNESS_M / 2.0) as f32),
             false,
@@ -584,7 +172,7 @@ impl TiledTerrain {
 
     /// The relief of region `region`, if it is a relief region.
     fn relief(&self, region: usize) -> Option<&RegionRelief> {
-        match &self.models[region] {
+        match &self.layout.models[region] {
             RegionModel::Relief(relief) => Some(relief),
             _ => None,
         }
@@ -593,7 +181,7 @@ impl TiledTerrain {
     /// The unloaded height of the ground at (x, y) in column `ix`: a relief
     /// region's, else the tiles' and rigid blocks' top, z = 0, m.
     fn resting_top_m(&self, ix: usize, x_m: f64, y_m: f64) -> f64 {
-        self.relief(self.column_region[ix])
+        self.relief(self.layout.column_region[ix])
             .map_or(0.0, |relief| relief.height_m(x_m, y_m))
     }
 }
@@ -626,8 +214,12 @@ impl Terrain for TiledTerrain {
         // Rigid and relief regions: one solid block per region, top at z = 0
         // (just below a relief).
         let depth_below = p.travel_m + TILE_THICKNESS_M;
-        for ((region, model), friction) in
-            self.regions.iter().zip(&self.models).zip(&self.frictions)
+        for ((region, model), friction) in self
+            .layout
+            .regions
+            .iter()
+            .zip(&self.layout.models)
+            .zip(&self.layout.frictions)
         {
             // Relief: its solids, over a block that stops just below it.
             let top_m = match model {
@@ -665,14 +257,14 @@ impl Terrain for TiledTerrain {
         // (docs/notebook/2026-11-29-physics-three-times-faster.md, "Tiles guided by their body").
         let side = p.pitch_m - p.gap_m;
         let g = self.ctx.gravity_m_per_s2;
-        self.tiles = Vec::with_capacity(self.columns * self.rows);
-        for ix in 0..self.columns {
-            let soil = match &self.models[self.column_region[ix]] {
+        self.tiles = Vec::with_capacity(self.layout.columns * self.layout.rows);
+        for ix in 0..self.layout.columns {
+            let soil = match &self.layout.models[self.layout.column_region[ix]] {
                 RegionModel::Soil { model, .. } => Some((*model, 0.0)),
                 _ => None,
             };
-            for iy in 0..self.rows {
-                let Some(s) = self.cell_springs[ix * self.rows + iy] else {
+            for iy in 0..self.layout.rows {
+                let Some(s) = self.layout.cell_springs[ix * self.layout.rows + iy] else {
                     self.tiles.push(None);
                     continue;
                 };
@@ -693,7 +285,7 @@ impl Terrain for TiledTerrain {
                     (TILE_THICKNESS_M / 2.0) as f32,
                 )
                 .mass(p.tile_mass_kg as f32);
-                let friction = self.frictions[self.column_region[ix]];
+                let friction = self.layout.frictions[self.layout.column_region[ix]];
                 world.insert_collider(terrain_collider(collider, friction), Some(handle));
                 // Spring target above rest so that at q = 0 the spring holds the tile's weight.
                 let preload_m = p.tile_mass_kg * g / s.stiffness_n_per_m;
@@ -829,7 +421,12 @@ impl Terrain for TiledTerrain {
     fn surface_height_m(&self, world: &PhysicsWorld, x_m: f64, y_m: f64) -> f64 {
         match self.cell_at(x_m, y_m) {
             None => self.base_top_m(),
-            Some((ix, iy)) => match self.tiles.get(ix * self.rows + iy).copied().flatten() {
+            Some((ix, iy)) => match self
+                .tiles
+                .get(ix * self.layout.rows + iy)
+                .copied()
+                .flatten()
+            {
                 Some(tile) => -self.tile_sink_m(world, tile.body),
                 None => self.resting_top_m(ix, x_m, y_m),
             },
@@ -844,13 +441,13 @@ impl Terrain for TiledTerrain {
     }
 
     fn regions(&self) -> &[Region] {
-        &self.regions
+        &self.layout.regions
     }
 
     fn region_index_at(&self, x_m: f64, _y_m: f64) -> usize {
-        let f = ((x_m - self.first_center_m[0]) / self.params.pitch_m).round();
-        let ix = f.clamp(0.0, (self.columns - 1) as f64) as usize;
-        self.column_region[ix]
+        let f = ((x_m - self.layout.first_center_m[0]) / self.params.pitch_m).round();
+        let ix = f.clamp(0.0, (self.layout.columns - 1) as f64) as usize;
+        self.layout.column_region[ix]
     }
 
     fn tiles_in(&self, world: &PhysicsWorld, area: Rect, out: &mut Vec<TileState>) {
@@ -867,18 +464,23 @@ impl Terrain for TiledTerrain {
         let xs = index_range(
             area.min_m[0],
             area.max_m[0],
-            self.first_center_m[0],
-            self.columns,
+            self.layout.first_center_m[0],
+            self.layout.columns,
         );
         let ys = index_range(
             area.min_m[1],
             area.max_m[1],
-            self.first_center_m[1],
-            self.rows,
+            self.layout.first_center_m[1],
+            self.layout.rows,
         );
         for ix in xs {
             for iy in ys.clone() {
-                let sink_m = match self.tiles.get(ix * self.rows + iy).copied().flatten() {
+                let sink_m = match self
+                    .tiles
+                    .get(ix * self.layout.rows + iy)
+                    .copied()
+                    .flatten()
+                {
                     Some(tile) => self.tile_sink_m(world, tile.body),
                     None => 0.0,
                 };
@@ -886,7 +488,7 @@ impl Terrain for TiledTerrain {
                     center_m: self.center_m(ix, iy),
                     side_m: p - self.params.gap_m,
                     sink_m,
-                    region: self.column_region[ix],
+                    region: self.layout.column_region[ix],
                 });
             }
         }
@@ -894,15 +496,18 @@ impl Terrain for TiledTerrain {
 
     fn extent(&self) -> Rect {
         let half = self.params.pitch_m / 2.0;
-        let last = self.center_m(self.columns - 1, self.rows - 1);
+        let last = self.center_m(self.layout.columns - 1, self.layout.rows - 1);
         Rect {
-            min_m: [self.first_center_m[0] - half, self.first_center_m[1] - half],
+            min_m: [
+                self.layout.first_center_m[0] - half,
+                self.layout.first_center_m[1] - half,
+            ],
             max_m: [last[0] + half, last[1] + half],
         }
     }
 
     fn tile_count(&self) -> usize {
-        self.cell_springs.iter().flatten().count()
+        self.layout.cell_springs.iter().flatten().count()
     }
 
     fn tile_geometry_m(&self) -> Option<(f64, f64)> {
@@ -912,7 +517,7 @@ impl Terrain for TiledTerrain {
     /// The relief regions' ground (rough, hills, stairs), if any.
     fn ground_mesh(&self) -> Option<GroundMesh> {
         let mut all = GroundMesh::default();
-        for relief in (0..self.models.len()).filter_map(|r| self.relief(r)) {
+        for relief in (0..self.layout.models.len()).filter_map(|r| self.relief(r)) {
             let mesh = relief.mesh();
             let first = all.vertices_m.len() as u32;
             all.vertices_m.extend(mesh.vertices_m);
@@ -927,14 +532,16 @@ impl Terrain for TiledTerrain {
     /// loading, and the permanent sink once unloaded.
     fn details(&self) -> Vec<String> {
         let mut lines = Vec::new();
-        for (region, model) in self.regions.iter().zip(&self.models) {
-            let in_region = |ix: usize| self.column_region[ix] == region.index;
+        for (region, model) in self.layout.regions.iter().zip(&self.layout.models) {
+            let in_region = |ix: usize| self.layout.column_region[ix] == region.index;
             match model {
                 RegionModel::ElasticRange { .. } => {
-                    let depths: Vec<f64> = (0..self.columns)
+                    let depths: Vec<f64> = (0..self.layout.columns)
                         .filter(|&ix| in_region(ix))
-                        .flat_map(|ix| (0..self.rows).map(move |iy| ix * self.rows + iy))
-                        .filter_map(|i| self.cell_springs[i].map(|s| s.depth_m))
+                        .flat_map(|ix| {
+                            (0..self.layout.rows).map(move |iy| ix * self.layout.rows + iy)
+                        })
+                        .filter_map(|i| self.layout.cell_springs[i].map(|s| s.depth_m))
                         .collect();
                     let n = depths.len().max(1) as f64;
                     let (lo, hi) = depths

@@ -63,7 +63,7 @@ pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> Str
                 s.cost_of_transport
                     .map_or("-".into(), |v| format!("{v:.2}")),
                 100.0 * s.foot_slip_m_per_phase.mean,
-                s.falls_text()
+                falls_cell(s)
             );
         }
     }
@@ -75,4 +75,16 @@ pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> Str
     }
     out.push_str("```\n");
     out
+}
+
+/// A cell's falls by cause, and how many of them came at the far end of
+/// the terrain (the episode outran the field: not a fault of the gait).
+fn falls_cell(s: &experiment::eval::summary::Summary) -> String {
+    match s.falls_at_terrain_end {
+        0 => s.falls_text(),
+        n => format!(
+            "{} ({n} at the end of the terrain: walked off it)",
+            s.falls_text()
+        ),
+    }
 }

@@ -229,12 +229,12 @@ fn crawl(spec: &str, seed: u64, config: &WorldConfig, phases: usize) -> String {
     )
 }
 
-fn main() {
+fn main() -> std::process::ExitCode {
     let options = match parse_options() {
         Ok(o) => o,
         Err(e) => {
             eprintln!("physics_fidelity: {e}");
-            std::process::exit(2);
+            return std::process::ExitCode::from(2);
         }
     };
     let c = &options.config;
@@ -315,4 +315,5 @@ fn main() {
     for line in &results[TERRAINS.len()..] {
         println!("{line}");
     }
+    std::process::ExitCode::SUCCESS
 }

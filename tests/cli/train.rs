@@ -931,6 +931,48 @@ fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
     );
 }
 
+/// The README's first command trains exactly as the run that gave
+/// `policies/elastic-5cm` did: its first iterations write the shipped
+/// `metrics.jsonl` lines, every value but the timings, to the last digit.
+/// A change that moves training (physics, task, learner, seeding) fails
+/// here.
+#[test]
+fn the_readme_command_trains_its_first_iterations_as_the_shipped_run_did() {
+    let dir = scratch_dir("readme-determinism");
+    let run = dir.join("run");
+    ok(&[
+        "train",
+        "--terrain",
+        "elastic:5cm",
+        "--iterations",
+        "2",
+        "--threads",
+        "2",
+        "--run-dir",
+        s(&run),
+        "--rerun",
+        "off",
+    ]);
+    let without_times = |line: &str| {
+        let mut v: Value = serde_json::from_str(line).unwrap();
+        let o = v.as_object_mut().unwrap();
+        o.remove("secs");
+        o.remove("phases_per_s");
+        v
+    };
+    let ours = std::fs::read_to_string(run.join("metrics.jsonl")).unwrap();
+    let shipped = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies/elastic-5cm/metrics.jsonl"),
+    )
+    .unwrap();
+    let ours: Vec<_> = ours.lines().map(without_times).collect();
+    let shipped: Vec<_> = shipped.lines().take(2).map(without_times).collect();
+    assert_eq!(ours.len(), 2);
+    for (k, (a, b)) in ours.iter().zip(&shipped).enumerate() {
+        assert_eq!(a, b, "iteration {}", k + 1);
+    }
+}
+
 #[test]
 fn bad_training_flags_are_refused() {
     let err = failure(&["train", "--envs", "0", "--rerun", "off"], 2);

@@ -106,6 +106,8 @@ fn sample(samples: usize) -> impl Iterator<Item = f64> {
 /// Told what a phase does as it runs. Every method has an empty default.
 pub trait PhaseObserver {
     /// An episode begins: the task is reset and settled, no phase has run.
+    /// Told by whoever runs the whole episode (`Task` itself does not), as
+    /// an evaluation does for a video of its episode.
     fn episode_started(&mut self, _task: &Task) {}
     /// Before the first physics step of a phase.
     fn phase_started(&mut self, _task: &Task, _start: &PhaseStart) {}

@@ -25,6 +25,7 @@ pub mod buffer;
 pub mod checkpoint;
 pub mod config;
 pub mod env;
+pub mod episodes;
 pub mod export;
 pub mod gae;
 pub mod learner;

@@ -20,6 +20,7 @@ use crate::LearnError;
 use crate::buffer::RolloutBuffer;
 use crate::config::{PpoConfig, adapt_learning_rate};
 use crate::env::{StepResult, VecEnv};
+use crate::episodes::EpisodeCollector;
 use crate::gae::gae;
 use crate::normalizer::ObsNormalizer;
 use crate::optim::{Adam, check_learning_rate, clip_grad_norm, gradients};
@@ -250,9 +251,8 @@ impl Trainer {
         let o = env.observation_size();
         let a = env.action_size();
         let steps = self.config.steps_per_env;
-        let term_names = env.reward_term_names();
-        let metric_names = env.episode_metric_names();
-        let (t_count, m_count) = (term_names.len(), metric_names.len());
+        let mut episodes =
+            EpisodeCollector::new(n, env.reward_term_names(), env.episode_metric_names());
         let gamma = self.config.gamma;
 
         // ---- collect -------------------------------------------------------
@@ -265,14 +265,6 @@ impl Trainer {
         let mut out = StepResult::new(env);
 
         let mut buffer = RolloutBuffer::new(n, o, a, steps);
-
-        let mut running_return = vec![0.0f64; n];
-        let mut running_length = vec![0usize; n];
-        let (mut episodes, mut terminated) = (0usize, 0usize);
-        let (mut return_sum, mut length_sum) = (0.0f64, 0.0f64);
-        let mut metric_sums = vec![0.0f64; m_count];
-        let mut term_sums = vec![0.0f64; t_count];
-        let mut reward_sum = 0.0f64;
 
         for _ in 0..steps {
             let clock = Instant::now();
@@ -309,24 +301,7 @@ impl Trainer {
             }
 
             for i in 0..n {
-                let r = f64::from(out.rewards[i]);
-                reward_sum += r;
-                running_return[i] += r;
-                running_length[i] += 1;
-                for (k, sum) in term_sums.iter_mut().enumerate() {
-                    *sum += f64::from(out.reward_terms[i * t_count + k]);
-                }
-                if out.ended(i) {
-                    episodes += 1;
-                    terminated += usize::from(out.terminated[i]);
-                    return_sum += running_return[i];
-                    length_sum += running_length[i] as f64;
-                    for (k, sum) in metric_sums.iter_mut().enumerate() {
-                        *sum += f64::from(out.episode_metrics[i * m_count + k]);
-                    }
-                    running_return[i] = 0.0;
-                    running_length[i] = 0;
-                }
+                episodes.record(&out, i);
             }
             buffer.push(
                 &obs,
@@ -422,23 +397,17 @@ impl Trainer {
 
         let log_std: Vec<f32> = self.policy.log_std.as_tensor().to_vec1()?;
         let mean = |s: f64| s / updates.max(1) as f64;
-        let per_episode = |s: f64| (episodes > 0).then(|| s / episodes as f64);
+        let episodes = episodes.finish(total);
         Ok(IterationStats {
             iteration: self.iteration,
             steps: total,
-            episodes,
-            terminated,
-            mean_episode_return: per_episode(return_sum),
-            mean_episode_length: per_episode(length_sum),
-            episode_metrics: metric_names
-                .into_iter()
-                .zip(metric_sums.iter().map(|&s| per_episode(s)))
-                .collect(),
-            mean_step_reward: reward_sum / total as f64,
-            reward_terms: term_names
-                .into_iter()
-                .zip(term_sums.iter().map(|s| s / total as f64))
-                .collect(),
+            episodes: episodes.episodes,
+            terminated: episodes.terminated,
+            mean_episode_return: episodes.mean_return,
+            mean_episode_length: episodes.mean_length,
+            episode_metrics: episodes.metrics,
+            mean_step_reward: episodes.mean_step_reward,
+            reward_terms: episodes.reward_terms,
             policy_loss: mean(sums[0]),
             value_loss: mean(sums[1]),
             entropy: f64::from(

@@ -24,6 +24,7 @@ use super::replay::{Batch, ReplayBuffer};
 use super::squashed::{bounded_log_std, sample};
 use crate::LearnError;
 use crate::env::{StepResult, VecEnv};
+use crate::episodes::EpisodeCollector;
 use crate::normalizer::ObsNormalizer;
 use crate::optim::{Adam, clip_grad_norm, gradients};
 use crate::policy::{Mlp, standard_normal};
@@ -342,15 +343,9 @@ impl SacAgent {
         let (o, a) = (self.obs_size, self.action_size);
         let mut obs = vec![0.0f32; n * o];
         env.reset_all(derive_seed(self.seed, self.iteration), &mut obs);
-        let mut episode_return = vec![0.0f64; n];
-        let mut episode_length = vec![0usize; n];
-        let metric_names = env.episode_metric_names();
-        let term_names = env.reward_term_names();
-        let mut term_sums = vec![0.0f64; term_names.len()];
+        let mut episodes =
+            EpisodeCollector::new(n, env.reward_term_names(), env.episode_metric_names());
         let mut out = StepResult::new(env);
-        let (mut returns, mut lengths) = (Vec::new(), Vec::new());
-        let mut metric_sums = vec![(0.0f64, 0usize); metric_names.len()];
-        let (mut terminated_count, mut reward_sum) = (0usize, 0.0f64);
         let (mut env_secs, mut update_secs) = (0.0f64, 0.0f64);
         let (mut loss_sums, mut updates) = ((0.0f64, 0.0f64, 0.0f64), 0usize);
         let mut actor_updates = 0usize;
@@ -383,26 +378,7 @@ impl SacAgent {
                     next,
                     out.terminated[i],
                 );
-                reward_sum += f64::from(out.rewards[i]);
-                for (k, sum) in term_sums.iter_mut().enumerate() {
-                    *sum += f64::from(out.reward_terms[i * term_names.len() + k]);
-                }
-                episode_return[i] += f64::from(out.rewards[i]);
-                episode_length[i] += 1;
-                if ended {
-                    returns.push(episode_return[i]);
-                    lengths.push(episode_length[i] as f64);
-                    terminated_count += out.terminated[i] as usize;
-                    for (k, sum) in metric_sums.iter_mut().enumerate() {
-                        let v = out.episode_metrics[i * metric_names.len() + k];
-                        if v.is_finite() {
-                            sum.0 += f64::from(v);
-                            sum.1 += 1;
-                        }
-                    }
-                    episode_return[i] = 0.0;
-                    episode_length[i] = 0;
-                }
+                episodes.record(&out, i);
             }
             obs.copy_from_slice(&out.obs);
             self.total_steps += n as u64;
@@ -425,29 +401,21 @@ impl SacAgent {
             }
         }
         self.iteration += 1;
-        let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
         let per_update = |s: f64| (updates > 0).then(|| s / updates as f64);
         let per_actor_update = |s: f64| (actor_updates > 0).then(|| s / actor_updates as f64);
         let steps = n * self.config.steps_per_env;
+        let episodes = episodes.finish(steps);
         Ok(SacStats {
             iteration: self.iteration,
             steps,
             total_steps: self.total_steps,
-            episodes: returns.len(),
-            terminated: terminated_count,
-            mean_episode_return: mean(&returns),
-            mean_episode_length: mean(&lengths),
-            episode_metrics: metric_names
-                .into_iter()
-                .zip(metric_sums)
-                .map(|(name, (sum, count))| (name, (count > 0).then(|| sum / count as f64)))
-                .collect(),
-            mean_step_reward: reward_sum / steps as f64,
-            reward_terms: term_names
-                .into_iter()
-                .zip(term_sums)
-                .map(|(name, sum)| (name, sum / steps as f64))
-                .collect(),
+            episodes: episodes.episodes,
+            terminated: episodes.terminated,
+            mean_episode_return: episodes.mean_return,
+            mean_episode_length: episodes.mean_length,
+            episode_metrics: episodes.metrics,
+            mean_step_reward: episodes.mean_step_reward,
+            reward_terms: episodes.reward_terms,
             updates,
             critic_loss: per_update(loss_sums.0),
             actor_loss: per_actor_update(loss_sums.1),

@@ -14,6 +14,7 @@ use experiment::Experiment;
 use experiment::train::run_dir::default_run_dir;
 use experiment::train::{IterationReport, RunPlan, RunStart, TrainObserver, TrainOutcome};
 use learn::{Algo, LearnerStats};
+use robot::RobotModel;
 use terrain_plugins::{Registry, TerrainSpec};
 use viz::RerunSink;
 
@@ -159,7 +160,7 @@ fn stop_flag() -> Result<Arc<AtomicBool>> {
 
 /// The run the flags describe: a resumed one, or a new one (a built-in
 /// recipe for `--terrain` alone, a fork with `--fork`).
-fn plan(registry: &Registry, args: &TrainArgs) -> Result<RunPlan> {
+fn plan(registry: &Registry, args: &TrainArgs, model: &RobotModel) -> Result<RunPlan> {
     let threads = match args.threads {
         Some(t) => t as usize,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -202,12 +203,11 @@ fn plan(registry: &Registry, args: &TrainArgs) -> Result<RunPlan> {
         .run_dir
         .clone()
         .unwrap_or_else(|| default_run_dir(&experiment));
-    let model = args.scene.robot()?;
     RunPlan::fresh(
         registry,
         experiment,
         run_dir,
-        &model,
+        model,
         threads,
         args.fork.as_deref(),
     )
@@ -215,8 +215,8 @@ fn plan(registry: &Registry, args: &TrainArgs) -> Result<RunPlan> {
 
 /// `quadwalk train`: exit code 130 when Ctrl-C stopped the run.
 pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<ExitCode> {
-    let plan = plan(registry, args)?;
     let model = args.scene.robot()?;
+    let plan = plan(registry, args, &model)?;
     let stop = stop_flag()?;
     let sink = args.rerun.sink(RerunSink::Spawn);
     let mut loggers = Vec::new();

@@ -290,20 +290,8 @@ impl FieldLayout {
 mod tests {
     use super::*;
 
-    /// The defaults of `tile_param_decls`: 20 cm pitch on a 40 m x 3 m field
-    /// reaching 2 m behind x = 0.
     fn params() -> TileParams {
-        TileParams {
-            pitch_m: 0.2,
-            gap_m: 0.002,
-            travel_m: 0.15,
-            damping_ratio: 0.5,
-            tile_mass_kg: 0.5,
-            friction: 1.0,
-            length_m: 40.0,
-            back_m: 2.0,
-            width_m: 3.0,
-        }
+        super::super::params::default_params()
     }
 
     fn elastic(depth_m: f64) -> Surface {

@@ -174,22 +174,29 @@ impl TileParams {
     }
 }
 
+/// The defaults of [`tile_param_decls`]: 20 cm pitch on a 40 m x 3 m field
+/// reaching 2 m behind x = 0 (for the tile tests, without a spec).
+#[cfg(test)]
+pub(super) fn default_params() -> TileParams {
+    TileParams {
+        pitch_m: 0.2,
+        gap_m: 0.002,
+        travel_m: 0.15,
+        damping_ratio: 0.5,
+        tile_mass_kg: 0.5,
+        friction: 1.0,
+        length_m: 40.0,
+        back_m: 2.0,
+        width_m: 3.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn params() -> TileParams {
-        TileParams {
-            pitch_m: 0.2,
-            gap_m: 0.002,
-            travel_m: 0.15,
-            damping_ratio: 0.5,
-            tile_mass_kg: 0.5,
-            friction: 1.0,
-            length_m: 40.0,
-            back_m: 2.0,
-            width_m: 3.0,
-        }
+        default_params()
     }
 
     #[test]

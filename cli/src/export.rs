@@ -66,7 +66,7 @@ pub fn export(registry: &terrain_plugins::Registry, args: &ExportArgs) -> Result
     }
     let checkpoint = resolve_checkpoint(&args.checkpoint)
         .with_context(|| format!("--checkpoint {}", args.checkpoint.display()))?;
-    let learner = learn::Learner::load(&checkpoint)
+    let learner = learn::registry::load_checkpoint(&checkpoint)
         .with_context(|| format!("--checkpoint {}", args.checkpoint.display()))?;
     let config_path = checkpoint.join(CONFIG_FILE);
     let config = std::fs::read(&config_path)
@@ -109,7 +109,7 @@ pub fn export(registry: &terrain_plugins::Registry, args: &ExportArgs) -> Result
         "exported {} iteration {} ({}) to {} ({} files, {:.0} kB)",
         checkpoint.display(),
         learner.iteration(),
-        learner.algo().name(),
+        learner.name(),
         args.out.display(),
         files.len(),
         bytes as f64 / 1000.0

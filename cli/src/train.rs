@@ -13,7 +13,8 @@ use clap::Args;
 use experiment::Experiment;
 use experiment::train::run_dir::default_run_dir;
 use experiment::train::{IterationReport, RunPlan, RunStart, TrainObserver, TrainOutcome};
-use learn::{Algo, LearnerStats};
+use learn::registry::Registration;
+use learn::{Figure, IterationStats};
 use robot::RobotModel;
 use terrain_plugins::{Registry, TerrainSpec};
 use viz::RerunSink;
@@ -28,7 +29,7 @@ pub struct TrainArgs {
     scene: SceneArgs,
     /// Learner: ppo (the paper's), sac, or crossq (SAC with CrossQ's critics) [default: ppo, or the config's algo.name]
     #[arg(long, value_parser = parse_algo, conflicts_with = "resume")]
-    algo: Option<Algo>,
+    algo: Option<&'static Registration>,
     /// Parallel environments [default: 16, or the config's train.envs]
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=4096), conflicts_with = "resume")]
     envs: Option<u64>,
@@ -69,9 +70,13 @@ pub struct TrainArgs {
 }
 
 /// Parses `--algo`.
-fn parse_algo(text: &str) -> Result<Algo, String> {
-    Algo::from_name(text)
-        .ok_or_else(|| format!("{text:?} is not a learner: use ppo, sac or crossq"))
+fn parse_algo(text: &str) -> Result<&'static Registration, String> {
+    learn::registry::find(text).map_err(|_| {
+        format!(
+            "{text:?} is not a learner: use {}",
+            learn::registry::names()
+        )
+    })
 }
 
 /// What the terminal shows while a run trains.
@@ -178,8 +183,11 @@ fn plan(registry: &Registry, args: &TrainArgs, model: &RobotModel) -> Result<Run
     let mut experiment = args.scene.experiment(registry)?;
     // --terrain (or none) with a built-in recipe for it: the recipe, for
     // PPO, its learner
-    let recipe = match (args.scene.config_path(), args.algo) {
-        (None, None | Some(Algo::Ppo)) => experiment::recipes::recipe_for(&experiment),
+    let default_learner = args
+        .algo
+        .is_none_or(|a| a == learn::registry::default_algorithm());
+    let recipe = match args.scene.config_path() {
+        None if default_learner => experiment::recipes::recipe_for(&experiment),
         _ => None,
     };
     if let Some(recipe) = recipe {
@@ -286,28 +294,32 @@ fn sink_for_env(sink: &RerunSink, env: usize, first: bool) -> RerunSink {
     }
 }
 
-/// One progress line per iteration on stderr.
-fn progress(stats: &LearnerStats, total: u64, elapsed_secs: f64, phases_done: usize) {
+/// One progress line per iteration on stderr: the episodes and the
+/// algorithm's headline figures.
+fn progress(stats: &IterationStats, total: u64, elapsed_secs: f64, phases_done: usize) {
     let width = 20;
-    let iteration = stats.iteration();
+    let iteration = stats.iteration;
     let filled = (iteration as usize * width / total.max(1) as usize).min(width);
     let bar: String = "#".repeat(filled) + &".".repeat(width - filled);
     let fmt = |v: Option<f64>, unit: &str| v.map_or("-".to_string(), |v| format!("{v:.2}{unit}"));
     let rate = phases_done as f64 / elapsed_secs.max(1e-9);
-    let (mean_return, mean_length) = stats.episode_means();
-    let learner = match stats {
-        LearnerStats::Ppo(s) => format!("kl {:.4} | ev {:.2}", s.approx_kl, s.explained_variance),
-        LearnerStats::Sac(s) => format!(
-            "alpha {:.3} | q loss {} | updates {}",
-            s.alpha,
-            fmt(s.critic_loss, ""),
-            s.updates
-        ),
-    };
+    let learner: Vec<String> = stats
+        .headline
+        .iter()
+        .map(|(label, name)| {
+            let value = match stats.figure(name) {
+                Some(Figure::Count(n)) => n.to_string(),
+                Some(Figure::Value(v)) => format!("{v:.4}"),
+                Some(Figure::Missing) | None => "-".to_string(),
+            };
+            format!("{label} {value}")
+        })
+        .collect();
     eprintln!(
-        "[{bar}] iter {iteration}/{total} | {rate:.1} phases/s | return {} | distance {} | length {} | {learner}",
-        fmt(mean_return, ""),
+        "[{bar}] iter {iteration}/{total} | {rate:.1} phases/s | return {} | distance {} | length {} | {}",
+        fmt(stats.episodes.mean_return, ""),
         fmt(stats.episode_metric("distance_m"), " m"),
-        fmt(mean_length, ""),
+        fmt(stats.episodes.mean_length, ""),
+        learner.join(" | ")
     );
 }

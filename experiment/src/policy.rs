@@ -16,7 +16,7 @@ pub enum Policy {
     /// a trained checkpoint or exported policy (PPO or SAC), mean action
     Trained {
         /// the networks, loaded for acting
-        learner: Box<learn::Learner>,
+        learner: Box<dyn learn::Algorithm>,
         /// the task settings the policy was trained with (its observation
         /// layout and action prior)
         task: Box<TaskConfig>,
@@ -56,7 +56,7 @@ impl Policy {
             learn::checkpoint::resolve_checkpoint(path).with_context(|| format!("policy {arg}"))?
         };
         let learner =
-            learn::Learner::load_for_acting(&dir).with_context(|| format!("policy {arg}"))?;
+            learn::registry::load_for_acting(&dir).with_context(|| format!("policy {arg}"))?;
         let config = crate::config::Experiment::from_file(
             &dir.join(crate::train::run_dir::CONFIG_FILE),
             registry,
@@ -79,7 +79,7 @@ impl Policy {
             );
         }
         Ok(Self::Trained {
-            learner: Box::new(learner),
+            learner,
             task: Box::new(task),
             physics: Box::new(physics),
             sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),

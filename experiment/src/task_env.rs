@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use learn::trainer::derive_seed;
+use learn::seeds::derive_seed;
 use learn::{StepResult, VecEnv};
 use rayon::prelude::*;
 use robot::action::ACTION_SIZE;

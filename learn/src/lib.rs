@@ -1,46 +1,49 @@
-//! PPO (proximal policy optimisation) and SAC (soft actor-critic) on candle, over a [`VecEnv`] of flat
-//! `f32` buffers. This crate knows nothing of robots, physics or logging:
-//! an iteration returns an [`IterationStats`] that the caller displays.
+//! Reinforcement learning on candle, over a [`VecEnv`] of flat `f32`
+//! buffers: PPO (the paper's), SAC and CrossQ behind one [`Algorithm`]
+//! trait. This crate knows nothing of robots, physics or logging: an
+//! iteration returns an [`IterationStats`] that the caller displays.
 //!
-//! Layout (rsl_rl's split, CleanRL's one-equation-per-step comments):
+//! Layout (rsl_rl's split: one folder per algorithm, shared storage of
+//! episodes, checkpoints and optimisers; CleanRL's one-equation-per-step
+//! comments):
 //!
 //! | module | job |
 //! | --- | --- |
+//! | [`algorithm`] | the `Algorithm` trait and what an iteration reports |
+//! | [`registry`] | the algorithms, one registration each; loading any checkpoint or policy |
+//! | [`settings`] | an algorithm's settings as an experiment file's table |
+//! | [`ppo`] | proximal policy optimisation: runner, actor-critic, GAE, loss, checkpoint |
+//! | [`sac`] | soft actor-critic and CrossQ: squashed Gaussian, twin critics, temperature, replay buffer |
 //! | [`env`] | the `VecEnv` trait and its buffer shapes |
-//! | [`config`] | `PpoConfig`, the paper's values as defaults |
-//! | [`policy`] | actor and critic MLPs, the diagonal Gaussian |
+//! | [`episodes`] | episode statistics of a collection, for every algorithm |
+//! | [`mlp`] | the multilayer perceptron and normal draws |
 //! | [`normalizer`] | running observation normalisation |
-//! | [`buffer`] | the rollout buffer, step-major |
-//! | [`gae`] | generalised advantage estimation, a pure function |
-//! | [`ppo`] | the clipped objective, value loss, entropy bonus |
 //! | [`optim`] | Adam with exposed moments, gradient-norm clipping |
-//! | [`learner`] | either algorithm behind one type (train, checkpoint, act) |
-//! | [`trainer`] | collect, update, statistics; seeds |
-//! | [`checkpoint`] | atomic, checksummed checkpoints |
+//! | [`seeds`] | per-iteration seeds and generator positions |
+//! | [`checkpoint`] | atomic, checksummed checkpoint directories |
 //! | [`export`] | policies for use: the actor and normaliser of a checkpoint |
-//! | [`sac`] | soft actor-critic: squashed Gaussian, twin critics, temperature, replay buffer |
-//! | [`toy`] | a point-mass `VecEnv` that PPO must solve (tests, examples) |
+//! | [`toy`] | a point-mass `VecEnv` that every algorithm must solve (tests, examples) |
 
-pub mod buffer;
+pub mod algorithm;
 pub mod checkpoint;
-pub mod config;
 pub mod env;
 pub mod episodes;
 pub mod export;
-pub mod gae;
-pub mod learner;
+pub mod mlp;
 pub mod normalizer;
 pub mod optim;
-pub mod policy;
 pub mod ppo;
+pub mod registry;
 pub mod sac;
+pub mod seeds;
+pub mod settings;
 pub mod toy;
-pub mod trainer;
 
-pub use config::PpoConfig;
+pub use algorithm::{Algorithm, Figure, IterationStats};
 pub use env::{StepResult, VecEnv};
-pub use learner::{Algo, Learner, LearnerStats};
-pub use trainer::{IterationStats, Trainer};
+pub use ppo::{PpoConfig, Trainer};
+pub use registry::Registration;
+pub use settings::{Settings, SettingsValue};
 
 /// What can go wrong in learning.
 #[derive(Debug, thiserror::Error)]

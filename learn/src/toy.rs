@@ -12,7 +12,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::env::{StepResult, VecEnv};
-use crate::trainer::derive_seed;
+use crate::seeds::derive_seed;
 
 /// `N` point masses.
 #[derive(Debug, Clone)]
@@ -115,9 +115,9 @@ impl VecEnv for PointMass {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::PpoConfig;
     use crate::optim::gradients;
-    use crate::trainer::Trainer;
+    use crate::ppo::PpoConfig;
+    use crate::ppo::Trainer;
     use candle_core::Tensor;
 
     fn toy_config() -> PpoConfig {
@@ -142,13 +142,14 @@ mod tests {
         let first = trainer
             .iterate(&mut env)
             .unwrap()
-            .mean_episode_return
+            .episodes
+            .mean_return
             .unwrap();
         let mut best = f64::NEG_INFINITY;
         let mut history = vec![first];
         for _ in 1..40 {
             let stats = trainer.iterate(&mut env).unwrap();
-            let r = stats.mean_episode_return.unwrap();
+            let r = stats.episodes.mean_return.unwrap();
             history.push(r);
             best = best.max(r);
             if r > -10.0 {
@@ -232,8 +233,8 @@ mod tests {
                 3,
             )
             .unwrap();
-            let stats: Vec<f64> = (0..3)
-                .map(|_| t.iterate(&mut env).unwrap().policy_loss)
+            let stats: Vec<_> = (0..3)
+                .map(|_| t.iterate(&mut env).unwrap().figure("policy_loss"))
                 .collect();
             (stats, t.checkpoint_files().unwrap())
         };

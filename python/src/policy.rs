@@ -13,7 +13,7 @@ use crate::scene::{runtime_error, value_error};
 /// `quadwalk rollout --policy DIR` takes for the same observation.
 #[pyclass(module = "quadwalk._quadwalk", unsendable)]
 pub struct Policy {
-    learner: Box<learn::Learner>,
+    learner: Box<dyn learn::Algorithm>,
     config_path: String,
 }
 

@@ -3,7 +3,6 @@
 //! experiment trains at a given iteration.
 
 use anyhow::{Context, Result, anyhow, bail};
-use learn::Algo;
 use robot::task::TaskConfig;
 use serde::Deserialize;
 use terrain_plugins::{Registry, TerrainSpec};
@@ -105,10 +104,7 @@ impl Experiment {
         Some(
             self.curriculum[stage]
                 .learning_rate
-                .unwrap_or(match self.algo {
-                    Algo::Ppo => self.ppo.learning_rate,
-                    Algo::Sac | Algo::CrossQ => self.sac.learning_rate,
-                }),
+                .unwrap_or(self.learner().learning_rate()),
         )
     }
 
@@ -126,21 +122,19 @@ impl Experiment {
     /// the learner's configured one; `None` where PPO's adaptive rate
     /// (`desired_kl`) moves it.
     pub(super) fn effective_learning_rate_at(&self, iteration: u64) -> Option<f64> {
-        self.learning_rate_at(iteration).or(match self.algo {
-            Algo::Ppo if self.ppo.desired_kl.is_some() => None,
-            Algo::Ppo => Some(self.ppo.learning_rate),
-            Algo::Sac | Algo::CrossQ => Some(self.sac.learning_rate),
-        })
+        let learner = self.learner();
+        self.learning_rate_at(iteration)
+            .or((!learner.adapts_learning_rate()).then(|| learner.learning_rate()))
     }
 
     /// Stage learning rates and PPO's adaptive rate exclude each other.
     pub(super) fn check_stage_rates(&self, source: &str) -> Result<()> {
-        if self.algo == Algo::Ppo
-            && self.ppo.desired_kl.is_some()
+        if self.learner().adapts_learning_rate()
             && self.curriculum.iter().any(|s| s.learning_rate.is_some())
         {
             bail!(
-                "{source}: [[curriculum]] stages set learning_rate and [ppo] sets desired_kl, which moves the rate itself; keep one of the two"
+                "{source}: [[curriculum]] stages set learning_rate and [{}] sets desired_kl, which moves the rate itself; keep one of the two",
+                self.algo.table
             );
         }
         Ok(())

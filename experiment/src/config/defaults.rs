@@ -2,9 +2,9 @@
 //! table's keys go on top of a base (`[task]`, `[physics]`, `[ppo]`,
 //! `[sac]`).
 
-use anyhow::{Result, anyhow, bail};
-use learn::sac::SacConfig;
-use learn::{Algo, PpoConfig};
+use anyhow::{Result, anyhow};
+use learn::registry::Registration;
+use learn::{PpoConfig, Settings, SettingsValue};
 use robot::task::{BalanceTerms, DistanceReward, TaskConfig};
 use serde::Serialize;
 
@@ -14,18 +14,7 @@ pub(super) fn overlay<T: Serialize + serde::de::DeserializeOwned>(
     base: &T,
     table: Option<&toml::Table>,
 ) -> Result<T> {
-    let mut merged = match toml::Value::try_from(base)? {
-        toml::Value::Table(t) => t,
-        _ => bail!("settings do not serialise to a table"),
-    };
-    if let Some(table) = table {
-        for (key, value) in table {
-            merged.insert(key.clone(), value.clone());
-        }
-    }
-    toml::Value::Table(merged)
-        .try_into()
-        .map_err(|e: toml::de::Error| anyhow!("{}", e.message()))
+    learn::settings::overlay(base, table).map_err(|e| anyhow!("{e}"))
 }
 
 /// The task settings where an experiment is silent: the paper's, but for
@@ -53,16 +42,21 @@ pub fn default_ppo() -> PpoConfig {
     }
 }
 
-/// The SAC settings for `algo`: its defaults ([`Algo::sac_defaults`]) with
-/// the `[sac]` table's values on top. `crossq` with `variant = "sac"` is a
-/// contradiction and an error.
-pub(super) fn sac_settings(algo: Algo, table: Option<&toml::Table>) -> Result<SacConfig> {
-    let sac: SacConfig = overlay(&algo.sac_defaults(), table)?;
-    if algo == Algo::CrossQ && sac.variant != learn::sac::SacVariant::CrossQ {
-        bail!("variant = \"sac\" contradicts algo.name = \"crossq\"");
+/// The settings of `algo` from its experiment table: the algorithm's
+/// defaults, then quadwalk's where it has its own ([`default_ppo`] for
+/// `[ppo]`), then the file's `table` on top; checked by the algorithm.
+pub(super) fn resolve_learner(
+    algo: &'static Registration,
+    table: Option<&toml::Table>,
+) -> Result<Box<dyn Settings>, String> {
+    let mut merged = match algo.table {
+        "ppo" => default_ppo().to_table(),
+        _ => toml::Table::new(),
+    };
+    if let Some(table) = table {
+        merged.extend(table.clone());
     }
-    sac.validate()?;
-    Ok(sac)
+    (algo.settings)(Some(&merged))
 }
 
 /// `[task]`'s table resolved over [`default_task`].

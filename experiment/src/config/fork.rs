@@ -1,8 +1,6 @@
 //! Whether one experiment trains its first iterations exactly as another
 //! did (`train --fork`): the first difference, named.
 
-use learn::Algo;
-
 use super::Experiment;
 
 impl Experiment {
@@ -18,24 +16,15 @@ impl Experiment {
         if self.algo != other.algo {
             return Some(format!(
                 "the learner: {} against {}",
-                self.algo.name(),
-                other.algo.name()
+                self.algo.name, other.algo.name
             ));
         }
-        match self.algo {
-            Algo::Ppo if self.ppo != other.ppo => {
-                return Some(format!(
-                    "the [ppo] settings: {}",
-                    debug_difference(&self.ppo, &other.ppo)
-                ));
-            }
-            Algo::Sac | Algo::CrossQ if self.sac != other.sac => {
-                return Some(format!(
-                    "the [sac] settings: {}",
-                    debug_difference(&self.sac, &other.sac)
-                ));
-            }
-            _ => {}
+        if self.learner() != other.learner() {
+            return Some(format!(
+                "the [{}] settings: {}",
+                self.algo.table,
+                debug_difference(&self.learner(), &other.learner())
+            ));
         }
         if self.physics != other.physics {
             return Some(format!(

@@ -59,11 +59,14 @@
 //!
 //! Lists may be TOML arrays: `surfaces = ["2cm", "5cm", "rigid"]`.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
-use learn::sac::SacConfig;
-use learn::{Algo, PpoConfig};
+#[cfg(test)]
+use learn::PpoConfig;
+use learn::Settings;
+use learn::registry::{self, Registration};
 use robot::WorldConfig;
 use robot::task::TaskConfig;
 use serde::{Deserialize, Serialize};
@@ -80,20 +83,17 @@ pub use defaults::{default_ppo, default_task};
 pub use train_settings::TrainSettings;
 
 use curriculum::curriculum_from_doc;
-use defaults::{overlay, resolve_task, sac_settings};
+use defaults::{overlay, resolve_learner, resolve_task};
 use terrain_table::terrain_from_table;
 
-/// The sections an experiment file may have.
-const KNOWN_SECTIONS: [&str; 8] = [
-    "terrain",
-    "task",
-    "physics",
-    "algo",
-    "ppo",
-    "sac",
-    "train",
-    "curriculum",
-];
+/// The sections an experiment file may have: the fixed ones and every
+/// registered algorithm's table.
+fn known_sections() -> Vec<&'static str> {
+    let mut known = vec!["terrain", "task", "physics", "algo"];
+    known.extend(registry::tables());
+    known.extend(["train", "curriculum"]);
+    known
+}
 
 /// A parsed experiment file.
 #[derive(Debug, Clone, PartialEq)]
@@ -105,27 +105,27 @@ pub struct Experiment {
     /// how the world is simulated (defaults where the file is silent)
     pub physics: WorldConfig,
     /// which learner trains
-    pub algo: Algo,
-    /// PPO settings
-    pub ppo: PpoConfig,
-    /// SAC settings
-    pub sac: SacConfig,
-    /// the file's `[sac]` table, kept so that a learner named on the
-    /// command line gets its own defaults under the file's values
-    pub sac_table: SacTable,
+    pub algo: &'static Registration,
+    /// every algorithm table's settings (`[ppo]`, `[sac]`), resolved: the
+    /// learner's table by the learner, each other by the first algorithm
+    /// registered for it
+    pub settings: BTreeMap<&'static str, Box<dyn Settings>>,
+    /// the file's algorithm tables as written, kept so that a learner named
+    /// on the command line gets its own defaults under the file's values
+    pub algo_tables: AlgoTables,
     /// the training run's settings
     pub train: TrainSettings,
     /// curriculum stages, in order (empty: the terrain for all iterations)
     pub curriculum: Vec<Stage>,
 }
 
-/// The `[sac]` table as written. It takes no part in comparisons: two
-/// experiments are equal when their resolved settings (`Experiment::sac`)
-/// are, however the file spelled them.
+/// The algorithm tables as written. They take no part in comparisons: two
+/// experiments are equal when their resolved settings
+/// (`Experiment::settings`) are, however the file spelled them.
 #[derive(Debug, Clone, Default)]
-pub struct SacTable(pub Option<toml::Table>);
+pub struct AlgoTables(pub BTreeMap<String, toml::Table>);
 
-impl PartialEq for SacTable {
+impl PartialEq for AlgoTables {
     fn eq(&self, _: &Self) -> bool {
         true
     }
@@ -152,11 +152,12 @@ impl Experiment {
         let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
             anyhow!("config {source}: not valid TOML: {}", e.message())
         })?;
+        let known = known_sections();
         for key in doc.keys() {
-            if !KNOWN_SECTIONS.contains(&key.as_str()) {
+            if !known.contains(&key.as_str()) {
                 bail!(
                     "config {source}: unknown section or key {key:?} (known: {})",
-                    KNOWN_SECTIONS.join(", ")
+                    known.join(", ")
                 );
             }
         }
@@ -170,32 +171,25 @@ impl Experiment {
             (None, Some(first)) => first.terrain.clone(),
             _ => terrain_from_table(&doc, source, registry)?,
         };
-        let ppo: PpoConfig = match doc.get("ppo") {
-            None => default_ppo(),
-            Some(toml::Value::Table(table)) => overlay(&default_ppo(), Some(table))
-                .map_err(|e| anyhow!("config {source} [ppo]: {e}"))?,
-            Some(_) => bail!("config {source} [ppo]: must be a table"),
-        };
-        ppo.validate()
-            .map_err(|e| anyhow!("config {source} [ppo]: {e}"))?;
-        let sac_table = match doc.get("sac") {
-            None => None,
-            Some(toml::Value::Table(table)) => Some(table.clone()),
-            Some(_) => bail!("config {source} [sac]: must be a table"),
-        };
+        let mut algo_tables = BTreeMap::new();
+        for table in registry::tables() {
+            match doc.get(table) {
+                None => {}
+                Some(toml::Value::Table(t)) => {
+                    algo_tables.insert(table.to_string(), t.clone());
+                }
+                Some(_) => bail!("config {source} [{table}]: must be a table"),
+            }
+        }
         let algo = match doc.get("algo") {
-            None => Algo::default(),
+            None => registry::default_algorithm(),
             Some(value) => {
                 let section: AlgoSection =
                     value.clone().try_into().map_err(|e: toml::de::Error| {
                         anyhow!("config {source} [algo]: {}", e.message())
                     })?;
-                Algo::from_name(&section.name).ok_or_else(|| {
-                    anyhow!(
-                        "config {source} [algo]: name = {:?}: must be \"ppo\", \"sac\" or \"crossq\"",
-                        section.name
-                    )
-                })?
+                registry::find(&section.name)
+                    .map_err(|e| anyhow!("config {source} [algo]: name = {e}"))?
             }
         };
         let train: TrainSettings = match doc.get("train") {
@@ -217,16 +211,17 @@ impl Experiment {
         physics
             .validate()
             .map_err(|e| anyhow!("config {source} [physics]: {e}"))?;
-        let sac = sac_settings(algo, sac_table.as_ref())
-            .map_err(|e| anyhow!("config {source} [sac]: {e}"))?;
+        let algo_tables = AlgoTables(algo_tables);
+        let settings = algo_tables
+            .resolve(algo)
+            .map_err(|e| anyhow!("config {source} {e}"))?;
         let experiment = Self {
             terrain,
             task,
             physics,
             algo,
-            ppo,
-            sac,
-            sac_table: SacTable(sac_table),
+            settings,
+            algo_tables,
             train,
             curriculum,
         };
@@ -234,13 +229,20 @@ impl Experiment {
         Ok(experiment)
     }
 
-    /// Switches the learner (`--algo`): the SAC settings become the
-    /// algorithm's defaults under the file's `[sac]` values.
-    pub fn set_algo(&mut self, algo: Algo) -> Result<()> {
-        self.sac = sac_settings(algo, self.sac_table.0.as_ref())
-            .map_err(|e| anyhow!("--algo {}: [sac]: {e}", algo.name()))?;
+    /// Switches the learner (`--algo`): its table's settings become the
+    /// algorithm's defaults under the file's values.
+    pub fn set_algo(&mut self, algo: &'static Registration) -> Result<()> {
+        self.settings = self
+            .algo_tables
+            .resolve(algo)
+            .map_err(|e| anyhow!("--algo {}: {e}", algo.name))?;
         self.algo = algo;
-        self.check_stage_rates(&format!("--algo {}", algo.name()))
+        self.check_stage_rates(&format!("--algo {}", algo.name))
+    }
+
+    /// The learner's settings.
+    pub fn learner(&self) -> &dyn Settings {
+        &*self.settings[self.algo.table]
     }
 
     /// The experiment for a terrain spec with every other setting at its
@@ -250,10 +252,11 @@ impl Experiment {
             terrain,
             task: default_task(),
             physics: WorldConfig::default(),
-            algo: Algo::default(),
-            ppo: default_ppo(),
-            sac: SacConfig::default(),
-            sac_table: SacTable::default(),
+            algo: registry::default_algorithm(),
+            settings: AlgoTables::default()
+                .resolve(registry::default_algorithm())
+                .expect("the default settings are valid"),
+            algo_tables: AlgoTables::default(),
             train: TrainSettings::default(),
             curriculum: Vec::new(),
         }
@@ -276,16 +279,11 @@ impl Experiment {
         text.push_str(&toml::to_string(&task).expect("task settings serialise"));
         text.push('\n');
         text.push_str(&format!("[physics]\n{}\n", physics_toml(&self.physics)));
-        text.push_str(&format!("[algo]\nname = {:?}\n\n", self.algo.name()));
+        text.push_str(&format!("[algo]\nname = {:?}\n\n", self.algo.name));
         let mut tables = toml::Table::new();
-        tables.insert(
-            "ppo".into(),
-            toml::Value::try_from(&self.ppo).expect("PPO settings serialise"),
-        );
-        tables.insert(
-            "sac".into(),
-            toml::Value::try_from(&self.sac).expect("SAC settings serialise"),
-        );
+        for (name, settings) in &self.settings {
+            tables.insert(name.to_string(), toml::Value::Table(settings.to_table()));
+        }
         tables.insert(
             "train".into(),
             toml::Value::try_from(&self.train).expect("train settings serialise"),
@@ -320,8 +318,51 @@ pub fn physics_json(physics: &WorldConfig) -> serde_json::Value {
     serde_json::to_value(physics).expect("physics settings serialise")
 }
 
+impl AlgoTables {
+    /// Every algorithm table's settings with `algo` the learner: its table
+    /// resolved by it, each other table by the first algorithm registered
+    /// for it. The error names the table.
+    fn resolve(
+        &self,
+        algo: &'static Registration,
+    ) -> Result<BTreeMap<&'static str, Box<dyn Settings>>> {
+        let mut settings = BTreeMap::new();
+        for table in registry::tables() {
+            let reader = if algo.table == table {
+                algo
+            } else {
+                registry::ALGORITHMS
+                    .iter()
+                    .copied()
+                    .find(|r| r.table == table)
+                    .expect("a listed table has an algorithm")
+            };
+            let resolved = resolve_learner(reader, self.0.get(table))
+                .map_err(|e| anyhow!("[{table}]: {e}"))?;
+            settings.insert(table, resolved);
+        }
+        Ok(settings)
+    }
+}
+
 #[cfg(test)]
 impl Experiment {
+    /// The `[ppo]` settings.
+    pub(crate) fn ppo(&self) -> &PpoConfig {
+        self.settings["ppo"]
+            .as_any()
+            .downcast_ref()
+            .expect("[ppo] holds PPO settings")
+    }
+
+    /// The `[sac]` settings.
+    pub(crate) fn sac(&self) -> &learn::sac::SacConfig {
+        self.settings["sac"]
+            .as_any()
+            .downcast_ref()
+            .expect("[sac] holds SAC settings")
+    }
+
     /// [`Experiment::from_toml`] with the built-in terrains.
     pub(crate) fn from_toml_builtin(text: &str, source: &str) -> Result<Self> {
         Self::from_toml(text, source, &Registry::builtin())
@@ -397,31 +438,31 @@ mod tests {
         assert_eq!(f.task.forward_reward_per_m, 30.0);
         assert_eq!(f.task.target_progress_m, 0.03);
         assert_eq!(f.task.balance_terms, BalanceTerms::Penalty);
-        assert_eq!(f.algo, learn::Algo::Sac);
-        assert_eq!(f.sac.updates_per_step, 2.0);
+        assert_eq!(f.algo.name, "sac");
+        assert_eq!(f.sac().updates_per_step, 2.0);
         assert_eq!(
             Experiment::from_toml_builtin(&f.to_toml(), "round trip").unwrap(),
             f
         );
         // --algo crossq: CrossQ's defaults under the file's [sac] values
         let mut g = f.clone();
-        g.set_algo(learn::Algo::CrossQ).unwrap();
-        assert_eq!(g.sac.variant, learn::sac::SacVariant::CrossQ);
-        assert_eq!(g.sac.policy_delay, 3);
-        assert_eq!(g.sac.updates_per_step, 2.0);
+        g.set_algo(registry::find("crossq").unwrap()).unwrap();
+        assert_eq!(g.sac().variant, learn::sac::SacVariant::CrossQ);
+        assert_eq!(g.sac().policy_delay, 3);
+        assert_eq!(g.sac().updates_per_step, 2.0);
         assert_eq!(
             Experiment::from_toml_builtin(&g.to_toml(), "round trip")
                 .unwrap()
-                .sac,
-            g.sac
+                .sac(),
+            g.sac()
         );
         let crossq = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[algo]\nname = \"crossq\"\n[sac]\nlearning_rate = 3e-4\n",
             "t.toml",
         )
         .unwrap();
-        assert_eq!(crossq.sac.learning_rate, 3e-4);
-        assert_eq!(crossq.sac.adam_beta1, 0.5);
+        assert_eq!(crossq.sac().learning_rate, 3e-4);
+        assert_eq!(crossq.sac().adam_beta1, 0.5);
         let err = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[algo]\nname = \"crossq\"\n[sac]\nvariant = \"sac\"\n",
             "t.toml",
@@ -846,9 +887,9 @@ mod tests {
                 assert_eq!(e.task.distance_reward, DistanceReward::Progress, "{name}");
                 assert_eq!(e.task.balance_terms, BalanceTerms::Paper, "{name}");
                 assert_eq!(
-                    e.ppo,
+                    *e.ppo(),
                     PpoConfig {
-                        steps_per_env: e.ppo.steps_per_env,
+                        steps_per_env: e.ppo().steps_per_env,
                         ..PpoConfig::default()
                     },
                     "{name}"
@@ -864,7 +905,7 @@ mod tests {
         ] {
             let a = get(name);
             assert_eq!(a.task.observation.size(), size, "{name}");
-            assert_eq!(a.ppo, line.ppo, "{name}");
+            assert_eq!(a.ppo(), line.ppo(), "{name}");
             assert_eq!(a.task.distance_reward, line.task.distance_reward, "{name}");
             let terrains = |e: &Experiment| -> Vec<(String, u64)> {
                 e.curriculum
@@ -877,12 +918,15 @@ mod tests {
         // the shipped policies' recipes are quadwalk's defaults
         let rigid = get("rigid");
         assert_eq!(rigid.task, default_task());
-        assert_eq!(rigid.ppo, default_ppo());
+        assert_eq!(*rigid.ppo(), default_ppo());
         // the 5 cm curriculum starts as the rigid recipe, deepens the tiles,
         // then steps the learning rate down on 5 cm tiles, where it caps
         // the pace paid for
         let deepening = get("elastic-5cm-curriculum");
-        assert_eq!((&deepening.task, &deepening.ppo), (&rigid.task, &rigid.ppo));
+        assert_eq!(
+            (&deepening.task, &deepening.ppo()),
+            (&rigid.task, &rigid.ppo())
+        );
         let stages_of = |e: &Experiment| -> Vec<(String, u64, Option<f64>, Option<f64>)> {
             e.curriculum
                 .iter()
@@ -920,10 +964,13 @@ mod tests {
             "the cap is the stages' only task change"
         );
         assert_eq!(deepening.curriculum[0].iterations, rigid.train.iterations);
-        assert_eq!(deepening.learning_rate_at(0), Some(rigid.ppo.learning_rate));
+        assert_eq!(
+            deepening.learning_rate_at(0),
+            Some(rigid.ppo().learning_rate)
+        );
         // the first T_v2 recipe (2/40): the same stages, ending on T_v2
         let tv2 = get("tv2-curriculum");
-        assert_eq!((&tv2.task, &tv2.ppo), (&rigid.task, &rigid.ppo));
+        assert_eq!((&tv2.task, &tv2.ppo()), (&rigid.task, &rigid.ppo()));
         assert_eq!(tv2.terrain.to_string(), "varying:2m:2cm,3cm,4cm,5cm,rigid");
         // the 5 cm curriculum's stages with those from `first` on moved to
         // T_v2
@@ -1005,7 +1052,7 @@ mod tests {
         // 1 m ahead, its only change, in every stage
         let line = get("elastic-5cm-line");
         assert_eq!(stages_of(line), stages);
-        assert_eq!(line.ppo, deepening.ppo);
+        assert_eq!(line.ppo(), deepening.ppo());
         for iteration in [0, 260, 500, 839] {
             let task = line.task_at(iteration);
             assert_eq!(task.observation.goal_line_ahead_m, Some(1.0));
@@ -1062,14 +1109,14 @@ mod tests {
         let e = Experiment::from_toml_builtin("[terrain]\nspec = \"rigid\"\n", "t.toml").unwrap();
         assert_eq!(e.task.distance_reward, DistanceReward::NewGround);
         assert_eq!(e.task.balance_terms, BalanceTerms::Penalty);
-        assert_eq!(e.ppo.minibatch_size, 128);
+        assert_eq!(e.ppo().minibatch_size, 128);
         assert_eq!(e, Experiment::for_terrain(e.terrain.clone()));
         let e = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[ppo]\nepochs = 5\n",
             "t.toml",
         )
         .unwrap();
-        assert_eq!((e.ppo.minibatch_size, e.ppo.epochs), (128, 5));
+        assert_eq!((e.ppo().minibatch_size, e.ppo().epochs), (128, 5));
         let err = Experiment::from_toml_builtin(
             "[terrain]\nspec = \"rigid\"\n[ppo]\nepoch = 5\n",
             "t.toml",

@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use learn::LearnerStats;
+use learn::IterationStats;
 use learn::checkpoint::{remove_partial_saves, write_file_atomically};
 use robot::RobotModel;
 use terrain_plugins::{Registry, TerrainSpec};
@@ -52,7 +52,7 @@ pub struct RunStart<'a> {
 /// One completed iteration.
 pub struct IterationReport<'a> {
     /// the learner's statistics
-    pub stats: &'a LearnerStats,
+    pub stats: &'a IterationStats,
     /// the line written to `metrics.jsonl`
     pub record: &'a serde_json::Value,
     /// the run's total iterations
@@ -146,7 +146,7 @@ pub fn train(
         run_dir::start_fork(
             &run_dir,
             checkpoint,
-            &trainer,
+            &*trainer,
             &config_text,
             experiment.train.keep_checkpoints,
         )?;
@@ -173,7 +173,7 @@ pub fn train(
         env.attach_logger(e, logger);
     }
     observer.started(&RunStart {
-        algo: trainer.algo().name(),
+        algo: trainer.name(),
         terrain: experiment.terrain_at(start_iteration).1,
         envs: experiment.train.envs,
         steps_per_env: trainer.steps_per_env(),
@@ -227,12 +227,12 @@ pub fn train(
             });
         }
         let logging_secs = env.take_logging_secs();
-        phases_done += stats.steps();
+        phases_done += stats.steps;
         let record = metrics::record(&stats, terrain, logging_secs);
         append_line(&metrics_path, &record.to_string())?;
         let curves = metrics::curves(&stats);
         for l in env.loggers_mut() {
-            l.logger.log_training(stats.iteration() as i64, &curves);
+            l.logger.log_training(stats.iteration as i64, &curves);
             for warning in l.logger.take_warnings() {
                 observer.warning(&warning);
             }
@@ -244,7 +244,7 @@ pub fn train(
             elapsed_secs: started.elapsed().as_secs_f64(),
             phases_done,
         })?;
-        let done = stats.iteration();
+        let done = stats.iteration;
         if done % experiment.train.checkpoint_every == 0 || done == total {
             save_checkpoint(
                 &run_dir,

@@ -5,9 +5,9 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
+use learn::Algorithm;
 use learn::checkpoint::resolve_checkpoint;
-use learn::sac::SacAgent;
-use learn::{Algo, Learner, Trainer};
+use learn::registry::load_checkpoint;
 use robot::RobotModel;
 use terrain_plugins::Registry;
 
@@ -21,7 +21,7 @@ pub struct RunPlan {
     /// where the run writes
     pub run_dir: PathBuf,
     /// the learner, at the iteration the run goes on from
-    pub learner: Learner,
+    pub learner: Box<dyn Algorithm>,
     /// threads stepping the worlds
     pub threads: usize,
     /// a fork: the checkpoint the run starts from
@@ -69,20 +69,7 @@ impl RunPlan {
             robot::action::ACTION_SIZE,
             experiment.train.seed,
         );
-        let learner = match experiment.algo {
-            Algo::Ppo => Learner::Ppo(Box::new(Trainer::new(
-                experiment.ppo.clone(),
-                obs,
-                actions,
-                seed,
-            )?)),
-            Algo::Sac | Algo::CrossQ => Learner::Sac(Box::new(SacAgent::new(
-                experiment.sac.clone(),
-                obs,
-                actions,
-                seed,
-            )?)),
-        };
+        let learner = experiment.learner().build(obs, actions, seed)?;
         Ok(Self {
             experiment,
             run_dir,
@@ -105,8 +92,8 @@ impl RunPlan {
             resolve_checkpoint(resume).with_context(|| format!("--resume {}", resume.display()))?;
         let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
         let mut experiment = Experiment::from_file(&checkpoint.join(CONFIG_FILE), registry)?;
-        let learner =
-            Learner::load(&checkpoint).with_context(|| format!("--resume {}", resume.display()))?;
+        let learner = load_checkpoint(&checkpoint)
+            .with_context(|| format!("--resume {}", resume.display()))?;
         let run_dir = run_dir_of(&checkpoint).with_context(|| {
             format!(
                 "--resume {}: the checkpoint is not inside a run directory (RUN/checkpoints/iter-N); \
@@ -139,11 +126,11 @@ fn fork_from(
     fork: &Path,
     experiment: &Experiment,
     registry: &Registry,
-) -> Result<(Learner, PathBuf)> {
+) -> Result<(Box<dyn Algorithm>, PathBuf)> {
     let context = || format!("--fork {}", fork.display());
     let checkpoint = resolve_checkpoint(fork).with_context(context)?;
     let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
-    let learner = Learner::load(&checkpoint).with_context(context)?;
+    let learner = load_checkpoint(&checkpoint).with_context(context)?;
     let forked =
         Experiment::from_file(&checkpoint.join(CONFIG_FILE), registry).with_context(context)?;
     let done = learner.iteration();

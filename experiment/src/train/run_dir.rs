@@ -14,7 +14,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use learn::Learner;
+use learn::Algorithm;
 use learn::checkpoint::{point_latest, write_dir_atomically, write_file_atomically};
 
 use crate::config::Experiment;
@@ -125,7 +125,7 @@ pub(crate) fn save_checkpoint(
 pub(crate) fn start_fork(
     run_dir: &Path,
     checkpoint: &Path,
-    learner: &Learner,
+    learner: &dyn Algorithm,
     config_text: &str,
     keep: usize,
 ) -> Result<()> {

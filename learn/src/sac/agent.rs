@@ -23,54 +23,13 @@ use super::losses::{actor_loss, critic_loss, soft_target, temperature_loss};
 use super::replay::{Batch, ReplayBuffer};
 use super::squashed::{bounded_log_std, sample};
 use crate::LearnError;
+use crate::algorithm::{Figure, IterationStats, check_sizes};
 use crate::env::{StepResult, VecEnv};
 use crate::episodes::EpisodeCollector;
+use crate::mlp::{Mlp, standard_normal};
 use crate::normalizer::ObsNormalizer;
 use crate::optim::{Adam, clip_grad_norm, gradients};
-use crate::policy::{Mlp, standard_normal};
-use crate::trainer::{RngState, derive_seed};
-
-/// What one iteration did. Means over episodes are `None` when no episode
-/// ended in the iteration; losses are `None` before learning starts.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SacStats {
-    /// iterations completed, this one included
-    pub iteration: u64,
-    /// environment steps collected in this iteration
-    pub steps: usize,
-    /// environment steps collected since the start
-    pub total_steps: u64,
-    /// episodes that ended
-    pub episodes: usize,
-    /// of them, terminated
-    pub terminated: usize,
-    /// mean undiscounted return of the ended episodes
-    pub mean_episode_return: Option<f64>,
-    /// mean length (steps) of the ended episodes
-    pub mean_episode_length: Option<f64>,
-    /// mean of each environment metric over the ended episodes, named
-    pub episode_metrics: Vec<(String, Option<f64>)>,
-    /// mean reward per step
-    pub mean_step_reward: f64,
-    /// mean of each reward term per step, named
-    pub reward_terms: Vec<(String, f64)>,
-    /// gradient steps taken in this iteration
-    pub updates: usize,
-    /// critic loss, mean over the updates
-    pub critic_loss: Option<f64>,
-    /// actor loss, mean over the actor's updates
-    pub actor_loss: Option<f64>,
-    /// the temperature after the iteration
-    pub alpha: f64,
-    /// -mean log pi of the actor's samples in its updates (its entropy estimate)
-    pub entropy: Option<f64>,
-    /// seconds stepping the environments
-    pub env_secs: f64,
-    /// seconds in the updates
-    pub update_secs: f64,
-    /// environment steps per second over the iteration
-    pub steps_per_sec: f64,
-}
+use crate::seeds::{RngState, derive_seed};
 
 /// SAC's networks, optimisers, buffer and state.
 pub struct SacAgent {
@@ -125,11 +84,7 @@ impl SacAgent {
         seed: u64,
     ) -> Result<Self, LearnError> {
         config.validate()?;
-        if obs_size == 0 || action_size == 0 {
-            return Err(LearnError::Config(format!(
-                "observation size {obs_size} and action size {action_size} must both be positive"
-            )));
-        }
+        check_sizes(obs_size, action_size)?;
         let device = Device::Cpu;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let widths = |input: usize, output: usize| {
@@ -222,7 +177,7 @@ impl SacAgent {
 
     /// Actions sampled from the squashed Gaussian for raw observations
     /// `k x O`, drawing on the agent's own generator (collection).
-    fn act_stochastic(&mut self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError> {
+    fn collect_actions(&mut self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError> {
         let mut rng = self.rng.clone();
         let actions = self.act_sampled(raw_obs, &mut rng);
         self.rng = rng;
@@ -328,7 +283,7 @@ impl SacAgent {
     /// iteration) as PPO's are, so that a checkpoint between iterations
     /// resumes exactly; the transitions of episodes cut at the iteration's
     /// end keep their next observation and are bootstrapped like any other.
-    pub fn iterate(&mut self, env: &mut dyn VecEnv) -> Result<SacStats, LearnError> {
+    pub fn iterate(&mut self, env: &mut dyn VecEnv) -> Result<IterationStats, LearnError> {
         if env.observation_size() != self.obs_size || env.action_size() != self.action_size {
             return Err(LearnError::Mismatch(format!(
                 "the environment has {} observations and {} actions, the agent {} and {}",
@@ -359,7 +314,7 @@ impl SacAgent {
                     .map(|_| self.rng.random_range(-1.0f32..=1.0))
                     .collect()
             } else {
-                self.act_stochastic(&obs)?
+                self.collect_actions(&obs)?
             };
             let t = Instant::now();
             env.step(&actions, &mut out);
@@ -404,44 +359,43 @@ impl SacAgent {
         let per_update = |s: f64| (updates > 0).then(|| s / updates as f64);
         let per_actor_update = |s: f64| (actor_updates > 0).then(|| s / actor_updates as f64);
         let steps = n * self.config.steps_per_env;
-        let episodes = episodes.finish(steps);
-        Ok(SacStats {
+        Ok(IterationStats {
             iteration: self.iteration,
             steps,
-            total_steps: self.total_steps,
-            episodes: episodes.episodes,
-            terminated: episodes.terminated,
-            mean_episode_return: episodes.mean_return,
-            mean_episode_length: episodes.mean_length,
-            episode_metrics: episodes.metrics,
-            mean_step_reward: episodes.mean_step_reward,
-            reward_terms: episodes.reward_terms,
-            updates,
-            critic_loss: per_update(loss_sums.0),
-            actor_loss: per_actor_update(loss_sums.1),
-            alpha: self.alpha()?,
-            entropy: per_actor_update(loss_sums.2),
+            episodes: episodes.finish(steps),
             env_secs,
-            update_secs,
+            secs: vec![("update", update_secs)],
             steps_per_sec: steps as f64 / started.elapsed().as_secs_f64().max(1e-9),
+            figures: vec![
+                ("total_phases", Figure::Count(self.total_steps)),
+                ("updates", Figure::Count(updates as u64)),
+                ("critic_loss", Figure::from_option(per_update(loss_sums.0))),
+                (
+                    "actor_loss",
+                    Figure::from_option(per_actor_update(loss_sums.1)),
+                ),
+                ("alpha", Figure::Value(self.alpha()?)),
+                (
+                    "entropy",
+                    Figure::from_option(per_actor_update(loss_sums.2)),
+                ),
+            ],
+            headline: &[
+                ("alpha", "alpha"),
+                ("q loss", "critic_loss"),
+                ("updates", "updates"),
+            ],
         })
     }
 
     /// The sampling generator's position.
     pub fn rng_state(&self) -> RngState {
-        RngState {
-            seed: self.rng.get_seed(),
-            stream: self.rng.get_stream(),
-            word_pos: self.rng.get_word_pos(),
-        }
+        RngState::of(&self.rng)
     }
 
     /// Moves the sampling generator to `state`.
     pub(super) fn set_rng_state(&mut self, state: &RngState) {
-        let mut rng = ChaCha8Rng::from_seed(state.seed);
-        rng.set_stream(state.stream);
-        rng.set_word_pos(state.word_pos);
-        self.rng = rng;
+        self.rng = state.generator();
     }
 
     /// Sets the learning rate of the actor, critic and temperature optimisers
@@ -500,10 +454,10 @@ mod tests {
         let mut history = Vec::new();
         while agent.total_steps < 8_000 {
             let stats = agent.iterate(&mut env).unwrap();
-            let r = stats.mean_episode_return.unwrap();
+            let r = stats.episodes.mean_return.unwrap();
             history.push(r);
-            if stats.total_steps > 800 && r > -10.0 {
-                return (Some(stats.total_steps), history);
+            if agent.total_steps > 800 && r > -10.0 {
+                return (Some(agent.total_steps), history);
             }
         }
         (None, history)
@@ -691,7 +645,7 @@ mod tests {
             )
             .unwrap();
             (0..3)
-                .map(|_| agent.iterate(&mut env).unwrap().critic_loss)
+                .map(|_| agent.iterate(&mut env).unwrap().figure("critic_loss"))
                 .collect::<Vec<_>>()
         };
         assert_eq!(run(), run());

@@ -30,7 +30,8 @@ use crate::checkpoint::{
 /// The replay buffer's file name.
 pub const REPLAY_FILE: &str = "replay.safetensors";
 
-/// The `algo` value of a SAC state file.
+/// The `algo` value of a SAC state file (CrossQ's too: the variant is a
+/// setting).
 pub const ALGO: &str = "sac";
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -204,16 +205,6 @@ impl SacAgent {
     }
 }
 
-/// Whether the checkpoint in `dir` is a SAC one (its state file says
-/// `algo = "sac"`); PPO's state files carry no `algo`.
-pub fn is_sac_checkpoint(dir: &Path) -> bool {
-    resolve_checkpoint(dir)
-        .ok()
-        .and_then(|d| std::fs::read_to_string(d.join(STATE_FILE)).ok())
-        .and_then(|text| text.parse::<toml::Table>().ok())
-        .is_some_and(|t| t.get("algo").and_then(|v| v.as_str()) == Some(ALGO))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -248,7 +239,12 @@ mod tests {
         assert_eq!(first.buffer.len(), 100);
         write_dir_atomically(&tmp.path().join("c"), &first.checkpoint_files().unwrap()).unwrap();
         drop(first);
-        assert!(is_sac_checkpoint(&tmp.path().join("c")));
+        let expected = match config.variant {
+            crate::sac::SacVariant::Sac => "sac",
+            crate::sac::SacVariant::CrossQ => "crossq",
+        };
+        let loaded = crate::registry::load_checkpoint(&tmp.path().join("c")).unwrap();
+        assert_eq!(loaded.name(), expected);
         let mut resumed = SacAgent::load(&tmp.path().join("c")).unwrap();
         assert_eq!(resumed.config, config);
         let mut env = PointMass::new(4, 10);
@@ -310,7 +306,8 @@ mod tests {
         .unwrap();
         let ppo_dir = tmp.path().join("ppo");
         write_dir_atomically(&ppo_dir, &ppo.checkpoint_files().unwrap()).unwrap();
-        assert!(!is_sac_checkpoint(&ppo_dir));
+        let loaded = crate::registry::load_checkpoint(&ppo_dir).unwrap();
+        assert_eq!(loaded.name(), "ppo");
         let err = SacAgent::load(&ppo_dir).err().unwrap().to_string();
         assert!(err.contains(STATE_FILE), "{err}");
     }

@@ -14,7 +14,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::batch_renorm::{BatchRenorm, Mode};
 use crate::LearnError;
-use crate::policy::Mlp;
+use crate::mlp::Mlp;
 
 /// A critic with batch renormalisation: input -> BRN -> [dense -> BRN ->
 /// ReLU]* -> dense -> Q.

@@ -1,6 +1,6 @@
-//! The PPO runner: one iteration = reset every environment, collect
-//! `steps_per_env` steps from each, GAE, `epochs` passes of minibatch
-//! updates, statistics.
+//! The PPO runner: one iteration = reset every environment, [collect]
+//! `steps_per_env` steps from each, [advantages] (GAE), `epochs` passes of
+//! minibatch [updates], statistics.
 //!
 //! Every iteration starts from fresh episodes (seeded by the run's seed and
 //! the iteration number), so the whole state of a run between iterations is
@@ -9,6 +9,10 @@
 //! checkpoint therefore continues bit for bit as the uninterrupted run.
 //! An episode still running when the iteration ends is cut there and
 //! bootstrapped from the critic.
+//!
+//! [collect]: Trainer::collect
+//! [advantages]: Trainer::advantages
+//! [updates]: Trainer::update
 
 use std::time::Instant;
 
@@ -16,52 +20,49 @@ use candle_core::{Tensor, Var};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::actor_critic::{ActorCritic, gaussian_entropy};
+use super::buffer::RolloutBuffer;
+use super::config::{PpoConfig, adapt_learning_rate};
+use super::gae::{Gae, gae};
+use super::loss::{Minibatch, ppo_loss};
 use crate::LearnError;
-use crate::buffer::RolloutBuffer;
-use crate::config::{PpoConfig, adapt_learning_rate};
+use crate::algorithm::{Figure, IterationStats, check_sizes};
 use crate::env::{StepResult, VecEnv};
-use crate::episodes::EpisodeCollector;
-use crate::gae::gae;
+use crate::episodes::{EpisodeCollector, EpisodeStats};
 use crate::normalizer::ObsNormalizer;
 use crate::optim::{Adam, check_learning_rate, clip_grad_norm, gradients};
-use crate::policy::ActorCritic;
-use crate::ppo::{Minibatch, ppo_loss};
+use crate::seeds::{RngState, derive_seed};
 
-/// What one iteration did. Means over episodes are `None` when no episode
-/// ended in the iteration.
+/// What one iteration collected.
+struct Rollout {
+    /// the samples, step-major
+    buffer: RolloutBuffer,
+    /// the raw observations after the last step (for the bootstrap values)
+    last_raw_obs: Vec<f32>,
+    /// the episodes that ended and the rewards
+    episodes: EpisodeStats,
+    /// seconds stepping the environments
+    env_secs: f64,
+    /// seconds in the network while collecting
+    inference_secs: f64,
+}
+
+/// What one update did: means over its minibatch steps.
 #[derive(Debug, Clone, PartialEq)]
-pub struct IterationStats {
-    /// iterations completed, this one included (1 after the first)
-    pub iteration: u64,
-    /// environment steps collected (`envs x steps_per_env`)
-    pub steps: usize,
-    /// episodes that ended (terminated or truncated by the environment)
-    pub episodes: usize,
-    /// of them, terminated
-    pub terminated: usize,
-    /// mean undiscounted return of the ended episodes
-    pub mean_episode_return: Option<f64>,
-    /// mean length (steps) of the ended episodes
-    pub mean_episode_length: Option<f64>,
-    /// mean of each environment metric over the ended episodes, named
-    pub episode_metrics: Vec<(String, Option<f64>)>,
-    /// mean reward per step
-    pub mean_step_reward: f64,
-    /// mean of each reward term per step, named
-    pub reward_terms: Vec<(String, f64)>,
-    /// clipped surrogate loss, mean over the minibatch updates
+pub struct PpoUpdate {
+    /// clipped surrogate loss
     pub policy_loss: f64,
-    /// value loss (MSE), mean over the updates
+    /// value loss (MSE)
     pub value_loss: f64,
     /// policy entropy after the update
     pub entropy: f64,
-    /// approximate KL, mean over the updates
+    /// approximate KL
     pub approx_kl: f64,
-    /// clip fraction, mean over the updates
+    /// clip fraction
     pub clip_fraction: f64,
     /// `1 - Var(R - V) / Var(R)` of the critic before the update
     pub explained_variance: f64,
-    /// mean gradient norm (actor, critic) before clipping
+    /// gradient norm (actor, critic) before clipping
     pub grad_norm: (f64, f64),
     /// mean policy standard deviation after the update
     pub action_std: f64,
@@ -70,26 +71,26 @@ pub struct IterationStats {
     /// the learning rate at the end of the update (moves with
     /// `desired_kl`)
     pub learning_rate: f64,
-    /// seconds stepping the environments
-    pub env_secs: f64,
-    /// seconds in the network while collecting (inference)
-    pub inference_secs: f64,
-    /// seconds in the update (GAE, losses, gradients, Adam)
-    pub update_secs: f64,
-    /// environment steps per second over the whole iteration
-    pub steps_per_sec: f64,
 }
 
-/// The state that goes into and comes out of a checkpoint, besides the
-/// tensors.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RngState {
-    /// the ChaCha8 seed
-    pub seed: [u8; 32],
-    /// its stream
-    pub stream: u64,
-    /// its word position
-    pub word_pos: u128,
+impl PpoUpdate {
+    /// The figures of [`IterationStats::figures`], named as
+    /// `metrics.jsonl` writes them.
+    fn figures(&self) -> Vec<(&'static str, Figure)> {
+        vec![
+            ("policy_loss", Figure::Value(self.policy_loss)),
+            ("value_loss", Figure::Value(self.value_loss)),
+            ("entropy", Figure::Value(self.entropy)),
+            ("approx_kl", Figure::Value(self.approx_kl)),
+            ("clip_fraction", Figure::Value(self.clip_fraction)),
+            ("explained_variance", Figure::Value(self.explained_variance)),
+            ("grad_norm_actor", Figure::Value(self.grad_norm.0)),
+            ("grad_norm_critic", Figure::Value(self.grad_norm.1)),
+            ("action_std", Figure::Value(self.action_std)),
+            ("epochs", Figure::Count(self.epochs as u64)),
+            ("learning_rate", Figure::Value(self.learning_rate)),
+        ]
+    }
 }
 
 /// PPO on a [`VecEnv`].
@@ -110,14 +111,6 @@ pub struct Trainer {
     rng: ChaCha8Rng,
 }
 
-/// A well-mixed 64-bit value of `(seed, k)` (SplitMix64 finaliser).
-pub fn derive_seed(seed: u64, k: u64) -> u64 {
-    let mut z = seed ^ k.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 impl Trainer {
     /// Fresh networks for `obs_size` observations and `action_size` actions.
     pub fn new(
@@ -127,11 +120,7 @@ impl Trainer {
         seed: u64,
     ) -> Result<Self, LearnError> {
         config.validate()?;
-        if obs_size == 0 || action_size == 0 {
-            return Err(LearnError::Config(format!(
-                "observation size {obs_size} and action size {action_size} must both be positive"
-            )));
-        }
+        check_sizes(obs_size, action_size)?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let policy = ActorCritic::new(
             obs_size,
@@ -163,9 +152,6 @@ impl Trainer {
         iteration: u64,
         rng: RngState,
     ) -> Self {
-        let mut generator = ChaCha8Rng::from_seed(rng.seed);
-        generator.set_stream(rng.stream);
-        generator.set_word_pos(rng.word_pos);
         Self {
             config,
             policy,
@@ -173,7 +159,7 @@ impl Trainer {
             normalizer,
             seed,
             iteration,
-            rng: generator,
+            rng: rng.generator(),
         }
     }
 
@@ -188,11 +174,7 @@ impl Trainer {
 
     /// The sampling RNG's position.
     pub fn rng_state(&self) -> RngState {
-        RngState {
-            seed: self.rng.get_seed(),
-            stream: self.rng.get_stream(),
-            word_pos: self.rng.get_word_pos(),
-        }
+        RngState::of(&self.rng)
     }
 
     /// The environment seed of iteration `iteration` (0-based).
@@ -243,10 +225,36 @@ impl Trainer {
         Ok(())
     }
 
-    /// Runs one iteration: collect, then update.
+    /// Runs one iteration: collect, advantages, update.
     pub fn iterate(&mut self, env: &mut dyn VecEnv) -> Result<IterationStats, LearnError> {
         self.check_env(env)?;
         let started = Instant::now();
+        let rollout = self.collect(env)?;
+        let update_clock = Instant::now();
+        let advantages = self.advantages(&rollout)?;
+        let steps = rollout.buffer.rewards.len();
+        let update = self.update(rollout.buffer, advantages)?;
+        let update_secs = update_clock.elapsed().as_secs_f64();
+        self.iteration += 1;
+        Ok(IterationStats {
+            iteration: self.iteration,
+            steps,
+            episodes: rollout.episodes,
+            env_secs: rollout.env_secs,
+            secs: vec![
+                ("inference", rollout.inference_secs),
+                ("update", update_secs),
+            ],
+            steps_per_sec: steps as f64 / started.elapsed().as_secs_f64(),
+            figures: update.figures(),
+            headline: &[("kl", "approx_kl"), ("ev", "explained_variance")],
+        })
+    }
+
+    /// Collects `steps_per_env` steps of every environment from fresh
+    /// episodes, sampling from the policy; episodes cut by the
+    /// environment's time limit are bootstrapped from the critic.
+    fn collect(&mut self, env: &mut dyn VecEnv) -> Result<Rollout, LearnError> {
         let n = env.num_envs();
         let o = env.observation_size();
         let a = env.action_size();
@@ -254,8 +262,6 @@ impl Trainer {
         let mut episodes =
             EpisodeCollector::new(n, env.reward_term_names(), env.episode_metric_names());
         let gamma = self.config.gamma;
-
-        // ---- collect -------------------------------------------------------
         let mut env_secs = 0.0;
         let mut inference_secs = 0.0;
         let mut raw_obs = vec![0.0f32; n * o];
@@ -313,29 +319,45 @@ impl Trainer {
             );
             raw_obs.copy_from_slice(&out.obs);
         }
+        Ok(Rollout {
+            buffer,
+            last_raw_obs: raw_obs,
+            episodes: episodes.finish(steps * n),
+            env_secs,
+            inference_secs,
+        })
+    }
 
-        // ---- advantages ----------------------------------------------------
-        let update_clock = Instant::now();
-        let mut last_obs = raw_obs.clone();
+    /// GAE over the rollout, bootstrapped from the critic's values of the
+    /// observations after the last step.
+    fn advantages(&self, rollout: &Rollout) -> Result<Gae, LearnError> {
+        let mut last_obs = rollout.last_raw_obs.clone();
         self.normalizer.normalize(&mut last_obs);
         let last_values = self.policy.values(&last_obs)?;
-        let g = gae(
+        let buffer = &rollout.buffer;
+        Ok(gae(
             &buffer.rewards,
             &buffer.values,
             &buffer.ended,
             &last_values,
-            gamma,
+            self.config.gamma,
             self.config.gae_lambda,
-        );
-        let explained_variance = explained_variance(&buffer.values, &g.returns);
+        ))
+    }
 
-        // ---- update ----------------------------------------------------------
-        let total = steps * n;
+    /// `epochs` passes of shuffled minibatch steps on the clipped
+    /// objective, the value loss and the entropy bonus (stopped early by
+    /// `target_kl`; the rate moved by `desired_kl`).
+    fn update(&mut self, buffer: RolloutBuffer, g: Gae) -> Result<PpoUpdate, LearnError> {
+        let explained_variance = explained_variance(&buffer.values, &g.returns);
+        let o = self.policy.obs_size();
+        let a = self.policy.action_size();
+        let total = buffer.rewards.len();
         let device = self.policy.device().clone();
         let all_obs = Tensor::from_vec(buffer.obs, (total, o), &device)?;
         let all_actions = Tensor::from_vec(buffer.actions, (total, a), &device)?;
         let all_log_probs = Tensor::from_vec(buffer.log_probs, total, &device)?;
-        let all_returns = Tensor::from_vec(g.returns.clone(), total, &device)?;
+        let all_returns = Tensor::from_vec(g.returns, total, &device)?;
         let advantages = g.advantages;
         let minibatch = self.config.minibatch_size.min(total);
         let actor_vars = self.policy.actor_vars();
@@ -392,27 +414,14 @@ impl Trainer {
                 }
             }
         }
-        let update_secs = update_clock.elapsed().as_secs_f64();
-        self.iteration += 1;
 
         let log_std: Vec<f32> = self.policy.log_std.as_tensor().to_vec1()?;
         let mean = |s: f64| s / updates.max(1) as f64;
-        let episodes = episodes.finish(total);
-        Ok(IterationStats {
-            iteration: self.iteration,
-            steps: total,
-            episodes: episodes.episodes,
-            terminated: episodes.terminated,
-            mean_episode_return: episodes.mean_return,
-            mean_episode_length: episodes.mean_length,
-            episode_metrics: episodes.metrics,
-            mean_step_reward: episodes.mean_step_reward,
-            reward_terms: episodes.reward_terms,
+        Ok(PpoUpdate {
             policy_loss: mean(sums[0]),
             value_loss: mean(sums[1]),
             entropy: f64::from(
-                crate::policy::gaussian_entropy(self.policy.log_std.as_tensor())?
-                    .to_scalar::<f32>()?,
+                gaussian_entropy(self.policy.log_std.as_tensor())?.to_scalar::<f32>()?,
             ),
             approx_kl: mean(sums[2]),
             clip_fraction: mean(sums[3]),
@@ -422,10 +431,6 @@ impl Trainer {
                 / log_std.len() as f64,
             epochs: epochs_run,
             learning_rate: self.adam.learning_rate,
-            env_secs,
-            inference_secs,
-            update_secs,
-            steps_per_sec: total as f64 / started.elapsed().as_secs_f64(),
         })
     }
 
@@ -507,20 +512,14 @@ mod tests {
             let mut env = crate::toy::PointMass::new(4, 16);
             let mut t = Trainer::new(config, env.observation_size(), env.action_size(), 3).unwrap();
             let stats = t.iterate(&mut env).unwrap();
-            assert_eq!(stats.learning_rate, t.adam.learning_rate);
-            stats.learning_rate
+            let rate = stats.figure("learning_rate").and_then(Figure::as_f64);
+            assert_eq!(rate, Some(t.adam.learning_rate));
+            t.adam.learning_rate
         };
         // 10 epochs x 1 minibatch of 64: ten adaptations
         assert_eq!(run(None), 2e-4); // fixed
         assert_eq!(run(Some(1e-12)), 1e-5); // every KL above 2 d: down to the floor
         assert_eq!(run(Some(1e3)), 1e-2); // every KL below d / 2: up to the ceiling
-    }
-
-    #[test]
-    fn derived_seeds_differ_and_repeat() {
-        assert_eq!(derive_seed(7, 3), derive_seed(7, 3));
-        assert_ne!(derive_seed(7, 3), derive_seed(7, 4));
-        assert_ne!(derive_seed(7, 3), derive_seed(8, 3));
     }
 
     #[test]

@@ -13,9 +13,9 @@
 
 use candle_core::{DType, Tensor};
 
+use super::actor_critic::{ActorCritic, gaussian_entropy, gaussian_log_prob};
+use super::config::PpoConfig;
 use crate::LearnError;
-use crate::config::PpoConfig;
-use crate::policy::{ActorCritic, gaussian_entropy, gaussian_log_prob};
 
 /// A minibatch as tensors.
 #[derive(Debug, Clone)]

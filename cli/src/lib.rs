@@ -62,6 +62,8 @@ pub struct App {
     registry: Registry,
     /// the first plugin that could not be added, reported by [`App::run`]
     refused: Option<RegistryError>,
+    /// what a second Ctrl-C during training does ([`App::on_second_interrupt`])
+    second_interrupt: Option<fn() -> !>,
 }
 
 impl Default for App {
@@ -81,7 +83,17 @@ impl App {
         Self {
             registry,
             refused: None,
+            second_interrupt: None,
         }
+    }
+
+    /// What a second Ctrl-C during `train` does: the binary's choice
+    /// (`quadwalk`'s `main` exits with code 130, leaving the last
+    /// checkpoint). Without it a second Ctrl-C is only reported: the run
+    /// stops, checkpointed, as after the first.
+    pub fn on_second_interrupt(mut self, stop_now: fn() -> !) -> Self {
+        self.second_interrupt = Some(stop_now);
+        self
     }
 
     /// Adds a terrain plugin. A name already taken (or not a valid name) is
@@ -125,7 +137,11 @@ impl App {
             eprintln!("error: cannot register terrain plugin: {err}");
             return ExitCode::FAILURE;
         }
-        report(run_command(cli.command, &Arc::new(self.registry)))
+        report(run_command(
+            cli.command,
+            &Arc::new(self.registry),
+            self.second_interrupt,
+        ))
     }
 }
 
@@ -186,7 +202,11 @@ enum TerrainCommand {
     },
 }
 
-fn run_command(command: Command, registry: &Arc<Registry>) -> anyhow::Result<ExitCode> {
+fn run_command(
+    command: Command,
+    registry: &Arc<Registry>,
+    second_interrupt: Option<fn() -> !>,
+) -> anyhow::Result<ExitCode> {
     let done = |result: anyhow::Result<()>| result.map(|()| ExitCode::SUCCESS);
     match command {
         Command::Terrain(TerrainCommand::List) => done(commands::terrain_list(registry)),
@@ -206,7 +226,7 @@ fn run_command(command: Command, registry: &Arc<Registry>) -> anyhow::Result<Exi
         Command::Rollout(args) => done(rollout::rollout(registry, &args)),
         Command::Play(args) => done(rollout::play(registry, &args)),
         Command::Eval(args) => done(eval::eval(registry, &args)),
-        Command::Train(args) => train::train(registry, &args),
+        Command::Train(args) => train::train(registry, &args, second_interrupt),
         Command::Bench(args) => done(bench::run(registry, &args)),
         Command::Results(args) => done(results::results(registry, &args)),
         Command::Export(args) => done(export::export(registry, &args)),

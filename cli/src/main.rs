@@ -7,5 +7,11 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    quadwalk_cli::App::new().run()
+    quadwalk_cli::App::new().on_second_interrupt(stop_now).run()
+}
+
+/// A second Ctrl-C during training: stop at once (the last checkpoint
+/// stands), with the shell's code for an interrupt.
+fn stop_now() -> ! {
+    std::process::exit(130)
 }

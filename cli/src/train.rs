@@ -143,8 +143,9 @@ impl TrainObserver for Terminal {
 }
 
 /// The flag the Ctrl-C handler sets, installed once per process (so that
-/// an `App` may train more than once); a second Ctrl-C exits at once.
-fn stop_flag() -> Result<Arc<AtomicBool>> {
+/// an `App` may train more than once); a second Ctrl-C calls
+/// `second_interrupt` where the binary gave one.
+fn stop_flag(second_interrupt: Option<fn() -> !>) -> Result<Arc<AtomicBool>> {
     static STOP: OnceLock<Arc<AtomicBool>> = OnceLock::new();
     if let Some(flag) = STOP.get() {
         flag.store(false, Ordering::SeqCst);
@@ -154,8 +155,14 @@ fn stop_flag() -> Result<Arc<AtomicBool>> {
     let handler_flag = flag.clone();
     ctrlc::set_handler(move || {
         if handler_flag.swap(true, Ordering::SeqCst) {
-            eprintln!("\nsecond Ctrl-C: stopping now; the last checkpoint stands");
-            std::process::exit(130);
+            match second_interrupt {
+                Some(stop_now) => {
+                    eprintln!("\nsecond Ctrl-C: stopping now; the last checkpoint stands");
+                    stop_now();
+                }
+                None => eprintln!("\nsecond Ctrl-C: already stopping"),
+            }
+            return;
         }
         eprintln!("\nCtrl-C: writing a checkpoint and stopping (Ctrl-C again to stop at once)");
     })
@@ -222,10 +229,14 @@ fn plan(registry: &Registry, args: &TrainArgs, model: &RobotModel) -> Result<Run
 }
 
 /// `quadwalk train`: exit code 130 when Ctrl-C stopped the run.
-pub fn train(registry: &Arc<Registry>, args: &TrainArgs) -> Result<ExitCode> {
+pub fn train(
+    registry: &Arc<Registry>,
+    args: &TrainArgs,
+    second_interrupt: Option<fn() -> !>,
+) -> Result<ExitCode> {
     let model = args.scene.robot()?;
     let plan = plan(registry, args, &model)?;
-    let stop = stop_flag()?;
+    let stop = stop_flag(second_interrupt)?;
     let sink = args.rerun.sink(RerunSink::Spawn);
     let mut loggers = Vec::new();
     for (k, &e) in plan.experiment.train.rerun_envs.iter().enumerate() {

@@ -82,7 +82,11 @@ pub struct TaskEnv {
     terrain_seed: u64,
     /// one slot per task: its logger, if streamed
     loggers: Vec<Option<EnvLogger>>,
+    /// the policy's observation values per row
     obs_size: usize,
+    /// the critic's privileged values after them
+    /// (`[task.observation] privileged_critic`)
+    privileged_size: usize,
     pool: rayon::ThreadPool,
     interrupted: Arc<AtomicBool>,
     /// the tasks were just built and never stepped (the first reset need
@@ -110,6 +114,7 @@ impl TaskEnv {
             .context("cannot start the environment threads")?;
         let mut env = Self {
             obs_size: task.observation_size(),
+            privileged_size: task.observation.privileged_size(),
             loggers: (0..envs).map(|_| None).collect(),
             tasks: Vec::new(),
             registry: registry.clone(),
@@ -188,6 +193,10 @@ impl VecEnv for TaskEnv {
     }
 
     fn observation_size(&self) -> usize {
+        self.obs_size + self.privileged_size
+    }
+
+    fn policy_observation_size(&self) -> usize {
         self.obs_size
     }
 
@@ -204,7 +213,7 @@ impl VecEnv for TaskEnv {
     }
 
     fn reset_all(&mut self, seed: u64, obs: &mut [f32]) {
-        let o = self.obs_size;
+        let (o, width) = (self.obs_size, self.observation_size());
         // A stepped rapier world keeps solver and contact state that a body
         // reset does not clear; rebuilding makes every iteration (and a
         // resumed run) start from the same worlds.
@@ -216,12 +225,13 @@ impl VecEnv for TaskEnv {
         self.pool.install(|| {
             self.tasks
                 .par_iter_mut()
-                .zip(obs.par_chunks_mut(o))
+                .zip(obs.par_chunks_mut(width))
                 .zip(self.loggers.par_iter_mut())
                 .enumerate()
                 .for_each(|(i, ((task, row), logger))| {
                     task.set_seed(derive_seed(seed, i as u64));
-                    task.reset(row);
+                    task.reset(&mut row[..o]);
+                    task.observe_privileged(&mut row[o..]);
                     if let Some(l) = logger {
                         l.log_reset(task);
                     }
@@ -236,7 +246,7 @@ impl VecEnv for TaskEnv {
     /// Steps every task one phase. After Ctrl-C no physics runs: the step
     /// returns zeros at once and the trainer discards the iteration.
     fn step(&mut self, actions: &[f32], out: &mut StepResult) {
-        let o = self.obs_size;
+        let (o, width) = (self.obs_size, self.observation_size());
         let t = RewardTerms::NAMES.len();
         let m = EPISODE_METRICS.len();
         if self.interrupted.load(Ordering::Relaxed) {
@@ -262,8 +272,8 @@ impl VecEnv for TaskEnv {
                 .par_iter_mut()
                 .zip(self.loggers.par_iter_mut())
                 .zip(actions.par_chunks(ACTION_SIZE))
-                .zip(obs.par_chunks_mut(o))
-                .zip(final_obs.par_chunks_mut(o))
+                .zip(obs.par_chunks_mut(width))
+                .zip(final_obs.par_chunks_mut(width))
                 .zip(reward_terms.par_chunks_mut(t))
                 .zip(episode_metrics.par_chunks_mut(m))
                 .zip(rewards.par_iter_mut())
@@ -283,10 +293,12 @@ impl VecEnv for TaskEnv {
                         ),
                         trunc,
                     )| {
+                        let (policy_row, privileged_row) = obs_row.split_at_mut(o);
                         let outcome = match logger {
-                            Some(l) => task.step_phase_observed(action, obs_row, &mut Timed(l)),
-                            None => task.step_phase_observed(action, obs_row, &mut NoObserver),
+                            Some(l) => task.step_phase_observed(action, policy_row, &mut Timed(l)),
+                            None => task.step_phase_observed(action, policy_row, &mut NoObserver),
                         };
+                        task.observe_privileged(privileged_row);
                         *reward = outcome.reward as f32;
                         for (slot, value) in terms.iter_mut().zip(outcome.terms.values()) {
                             *slot = value as f32;
@@ -298,7 +310,8 @@ impl VecEnv for TaskEnv {
                             let base_x_m = task.world().base_pose().translation.vector.x;
                             metrics[0] = (base_x_m - task.start_xy_m()[0]) as f32;
                             metrics[1] = task.goals_reached() as f32;
-                            task.reset(obs_row);
+                            task.reset(&mut obs_row[..o]);
+                            task.observe_privileged(&mut obs_row[o..]);
                             if let Some(l) = logger {
                                 l.log_reset(task);
                             }

@@ -16,13 +16,23 @@
 //!
 //! An environment whose episode ends is reset by [`VecEnv::step`] itself:
 //! the row of `obs` then holds the first observation of the next episode.
+//!
+//! An environment may append privileged values to each observation row (an
+//! asymmetric actor-critic, rsl_rl's privileged observations): the first
+//! `policy_observation_size()` values of a row are what the policy sees,
+//! the rest only the critic (the simulator's state a robot cannot measure).
 
 /// `N` environments stepped together.
 pub trait VecEnv {
     /// `N`.
     fn num_envs(&self) -> usize;
-    /// `O`.
+    /// `O`: the values of an observation row, privileged ones included.
     fn observation_size(&self) -> usize;
+    /// The leading values of a row that the policy sees (the rest are
+    /// privileged, for the critic only). Default: all of them.
+    fn policy_observation_size(&self) -> usize {
+        self.observation_size()
+    }
     /// `A`.
     fn action_size(&self) -> usize;
     /// Names of the reward terms, `T` of them (may be empty).

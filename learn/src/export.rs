@@ -205,7 +205,7 @@ mod tests {
         .parse()
         .unwrap();
         let settings = (registration.settings)(Some(&table)).unwrap();
-        let mut learner = settings.build(4, 2, 1).unwrap();
+        let mut learner = settings.build((4, 0), 2, 1).unwrap();
         let mut env = PointMass::new(4, 10);
         for _ in 0..3 {
             learner.iterate(&mut env).unwrap();

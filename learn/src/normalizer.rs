@@ -59,6 +59,17 @@ impl ObsNormalizer {
         self.count += k;
     }
 
+    /// The statistics of the first `n` values only (what a policy that sees
+    /// only them is normalised with).
+    pub fn leading(&self, n: usize) -> Self {
+        Self {
+            mean: self.mean[..n].to_vec(),
+            var: self.var[..n].to_vec(),
+            count: self.count,
+            clip: self.clip,
+        }
+    }
+
     /// Normalises `k x size` observations in place.
     pub fn normalize(&self, obs: &mut [f32]) {
         let size = self.size();

@@ -191,7 +191,10 @@ mod tests {
             }
             .parse()
             .unwrap();
-            let mut learner = (r.settings)(Some(&table)).unwrap().build(4, 2, 3).unwrap();
+            let mut learner = (r.settings)(Some(&table))
+                .unwrap()
+                .build((4, 0), 2, 3)
+                .unwrap();
             let before = learner.checkpoint_files().unwrap();
             for bad in [0.0, -1e-4, 1.0, f64::NAN, f64::INFINITY] {
                 let err = learner.set_learning_rate(bad).unwrap_err().to_string();

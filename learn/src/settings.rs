@@ -25,11 +25,14 @@ pub trait Settings: SettingsValue + Debug + Send + Sync {
     /// `desired_kl`): a curriculum stage may then not set one.
     fn adapts_learning_rate(&self) -> bool;
 
-    /// A fresh learner for `obs_size` observations and `action_size`
-    /// actions, seeded by `seed`.
+    /// A fresh learner for `obs_size` observations (and `privileged_size`
+    /// values after them that only a critic may see,
+    /// [`crate::VecEnv::policy_observation_size`]) and `action_size`
+    /// actions, seeded by `seed`. An algorithm without an asymmetric critic
+    /// refuses privileged values.
     fn build(
         &self,
-        obs_size: usize,
+        obs_size: (usize, usize),
         action_size: usize,
         seed: u64,
     ) -> Result<Box<dyn Algorithm>, LearnError>;

@@ -7,6 +7,8 @@
 //! the mass by `0.1 * action`. Reward: minus the distance to the target
 //! after the move. Start and target are uniform in [-1, 1]^2; an episode is
 //! truncated after `episode_steps` steps. Episode metric: the final distance.
+//! [`PointMass::with_time_for_critic`] appends one privileged value, the
+//! share of the episode gone, that only an asymmetric critic sees.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -22,6 +24,7 @@ pub struct PointMass {
     steps: Vec<usize>,
     rngs: Vec<ChaCha8Rng>,
     episode_steps: usize,
+    time_for_critic: bool,
 }
 
 impl PointMass {
@@ -35,6 +38,17 @@ impl PointMass {
                 .map(|i| ChaCha8Rng::seed_from_u64(i as u64))
                 .collect(),
             episode_steps,
+            time_for_critic: false,
+        }
+    }
+
+    /// As [`PointMass::new`], each observation row followed by the share of
+    /// the episode gone, for the critic only
+    /// ([`VecEnv::policy_observation_size`] is 4).
+    pub fn with_time_for_critic(num_envs: usize, episode_steps: usize) -> Self {
+        Self {
+            time_for_critic: true,
+            ..Self::new(num_envs, episode_steps)
         }
     }
 
@@ -48,7 +62,10 @@ impl PointMass {
     fn observe(&self, i: usize, obs: &mut [f32]) {
         let [x, y] = self.position[i];
         let [tx, ty] = self.target[i];
-        obs.copy_from_slice(&[x, y, tx - x, ty - y]);
+        obs[..4].copy_from_slice(&[x, y, tx - x, ty - y]);
+        if self.time_for_critic {
+            obs[4] = self.steps[i] as f32 / self.episode_steps as f32;
+        }
     }
 
     fn distance(&self, i: usize) -> f32 {
@@ -64,6 +81,10 @@ impl VecEnv for PointMass {
     }
 
     fn observation_size(&self) -> usize {
+        4 + usize::from(self.time_for_critic)
+    }
+
+    fn policy_observation_size(&self) -> usize {
         4
     }
 
@@ -83,7 +104,8 @@ impl VecEnv for PointMass {
         for i in 0..self.num_envs() {
             self.rngs[i] = ChaCha8Rng::seed_from_u64(derive_seed(seed, i as u64));
             self.start(i);
-            self.observe(i, &mut obs[i * 4..(i + 1) * 4]);
+            let o = self.observation_size();
+            self.observe(i, &mut obs[i * o..(i + 1) * o]);
         }
     }
 
@@ -101,7 +123,8 @@ impl VecEnv for PointMass {
             out.reward_terms[i] = -distance;
             out.terminated[i] = false;
             out.truncated[i] = self.steps[i] >= self.episode_steps;
-            let row = i * 4..(i + 1) * 4;
+            let o = self.observation_size();
+            let row = i * o..(i + 1) * o;
             if out.truncated[i] {
                 self.observe(i, &mut out.final_obs[row.clone()]);
                 out.episode_metrics[i] = distance;
@@ -275,6 +298,72 @@ mod tests {
         assert_eq!(
             resumed.checkpoint_files().unwrap(),
             straight.checkpoint_files().unwrap()
+        );
+    }
+
+    /// An asymmetric critic: the critic sees the privileged value, the
+    /// actor and every exported or acting path only the first 4; it learns,
+    /// resumes bit for bit, and its export acts as it does.
+    #[test]
+    fn an_asymmetric_critic_learns_resumes_and_exports_the_actor_alone() {
+        use crate::algorithm::Algorithm;
+        use crate::checkpoint::write_dir_atomically;
+        let make = || Trainer::asymmetric(toy_config(), (4, 1), 2, 5).unwrap();
+        let mut straight = make();
+        assert_eq!(
+            straight.policy.critic.layers[0].weight.as_tensor().dims(),
+            [5, 32]
+        );
+        assert_eq!(
+            straight.policy.actor.layers[0].weight.as_tensor().dims(),
+            [4, 32]
+        );
+        let mut env = PointMass::with_time_for_critic(16, 25);
+        let returns: Vec<f64> = (0..30)
+            .map(|_| {
+                straight
+                    .iterate(&mut env)
+                    .unwrap()
+                    .episodes
+                    .mean_return
+                    .unwrap()
+            })
+            .collect();
+        assert!(
+            returns[25..].iter().sum::<f64>() / 5.0 > returns[..5].iter().sum::<f64>() / 5.0 + 3.0,
+            "{returns:?}"
+        );
+        // resume from iteration 28 equals the straight run at 30
+        let tmp = tempfile::tempdir().unwrap();
+        let mut first = make();
+        let mut env = PointMass::with_time_for_critic(16, 25);
+        for _ in 0..28 {
+            first.iterate(&mut env).unwrap();
+        }
+        write_dir_atomically(&tmp.path().join("c"), &first.checkpoint_files().unwrap()).unwrap();
+        let mut resumed = Trainer::load(&tmp.path().join("c")).unwrap();
+        for _ in 0..2 {
+            resumed.iterate(&mut env).unwrap();
+        }
+        assert_eq!(
+            resumed.checkpoint_files().unwrap(),
+            straight.checkpoint_files().unwrap()
+        );
+        // acting takes the actor's 4 values; the export acts the same
+        let obs = [0.1f32, -0.2, 0.5, -0.5];
+        let action = straight.act_deterministic(&obs).unwrap();
+        write_dir_atomically(&tmp.path().join("p"), &straight.policy_files().unwrap()).unwrap();
+        let exported = crate::registry::load_for_acting(&tmp.path().join("p")).unwrap();
+        assert_eq!(exported.obs_size(), 4);
+        assert_eq!(exported.act_deterministic(&obs).unwrap(), action);
+        // an environment without the privileged value does not fit
+        let err = straight
+            .iterate(&mut PointMass::new(2, 5))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("4 observations") && err.contains("5 (4 for the policy)"),
+            "{err}"
         );
     }
 

@@ -475,6 +475,59 @@ fn a_policy_exported_with_its_checkpoint_forks_like_the_run() {
     assert_eq!(rollout["phases"], 2);
 }
 
+/// `[task.observation] privileged_critic`: the critic sees 12 more values,
+/// the run resumes bit for bit, the checkpoint says so, and its policy acts
+/// on the task's own observation; SAC refuses it.
+#[test]
+fn a_privileged_critic_trains_resumes_and_its_policy_acts_on_the_plain_observation() {
+    let dir = scratch_dir("privileged");
+    let config = tiny_variant(
+        &dir,
+        "[task]\nmax_phases = 4\n",
+        "[task]\nmax_phases = 4\n\n[task.observation]\nprivileged_critic = true\n",
+    );
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    train_on_two_threads(&config, &a, "3");
+    train_on_two_threads(&config, &b, "2");
+    resume_on_two_threads(&b, "3");
+    assert_eq!(weights(&a), weights(&b), "the resumed run differs");
+    let state = std::fs::read_to_string(a.join("latest/state.toml")).unwrap();
+    assert!(
+        state.contains("obs_size = 102") && state.contains("privileged_size = 12"),
+        "{state}"
+    );
+    let r = json_of(&[
+        "rollout",
+        "--policy",
+        s(&a),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(r["phases"], 2);
+    let sac = dir.join("sac.toml");
+    let text = std::fs::read_to_string(&config).unwrap();
+    std::fs::write(&sac, format!("{text}{TINY_SAC}")).unwrap();
+    let err = failure(
+        &[
+            "train",
+            "--config",
+            s(&sac),
+            "--run-dir",
+            s(&dir.join("c")),
+            "--rerun",
+            "off",
+        ],
+        1,
+    );
+    assert!(
+        err.contains("privileged_critic") && err.contains("PPO"),
+        "{err}"
+    );
+}
+
 /// [`TINY`] learned by SAC: learning starts after 8 transitions.
 const TINY_SAC: &str = "\n[algo]\nname = \"sac\"\n\n[sac]\nhidden_sizes = [16]\nbatch_size = 8\nlearning_starts = 8\nsteps_per_env = 4\nbuffer_size = 1000\n";
 

@@ -69,7 +69,13 @@ impl RunPlan {
             robot::action::ACTION_SIZE,
             experiment.train.seed,
         );
-        let learner = experiment.learner().build(obs, actions, seed)?;
+        let privileged = experiment.task.observation.privileged_size();
+        let learner = experiment.learner().build((obs, privileged), actions, seed);
+        let learner = if privileged > 0 {
+            learner.context("[task.observation] privileged_critic")?
+        } else {
+            learner?
+        };
         Ok(Self {
             experiment,
             run_dir,

@@ -23,46 +23,69 @@ pub struct ActorCritic {
     pub actor: Mlp,
     /// `A` log standard deviations
     pub log_std: Var,
-    /// observation -> value
+    /// observation and privileged values -> value
     pub critic: Mlp,
     obs_size: usize,
+    privileged_size: usize,
     action_size: usize,
     device: Device,
 }
 
 impl ActorCritic {
     /// Fresh networks: `obs_size -> hidden... -> action_size` (output gain
-    /// 0.01, so the first actions are near 0) and `obs_size -> hidden... -> 1`.
+    /// 0.01, so the first actions are near 0) and `obs_size +
+    /// privileged_size -> hidden... -> 1` (an asymmetric critic when
+    /// `privileged_size > 0`).
     pub fn new(
-        obs_size: usize,
+        (obs_size, privileged_size): (usize, usize),
         action_size: usize,
         hidden: &[usize],
         init_log_std: f64,
         rng: &mut ChaCha8Rng,
     ) -> Result<Self, LearnError> {
         let device = Device::Cpu;
-        let sizes = |out: usize| {
-            std::iter::once(obs_size)
+        let sizes = |input: usize, out: usize| {
+            std::iter::once(input)
                 .chain(hidden.iter().copied())
                 .chain(std::iter::once(out))
                 .collect::<Vec<_>>()
         };
-        let actor = Mlp::new(&sizes(action_size), 0.01, rng, &device)?;
-        let critic = Mlp::new(&sizes(1), 1.0, rng, &device)?;
+        let actor = Mlp::new(&sizes(obs_size, action_size), 0.01, rng, &device)?;
+        let critic = Mlp::new(&sizes(obs_size + privileged_size, 1), 1.0, rng, &device)?;
         let log_std = Var::from_tensor(&Tensor::full(init_log_std as f32, action_size, &device)?)?;
         Ok(Self {
             actor,
             log_std,
             critic,
             obs_size,
+            privileged_size,
             action_size,
             device,
         })
     }
 
-    /// `O`.
+    /// `O`: the values the actor sees.
     pub fn obs_size(&self) -> usize {
         self.obs_size
+    }
+
+    /// `P`: the privileged values only the critic sees, after the `O`.
+    pub fn privileged_size(&self) -> usize {
+        self.privileged_size
+    }
+
+    /// The actor's part (the first `O` values) of `k x (O + P)` rows;
+    /// the rows themselves when there are no privileged values.
+    pub fn actor_part<'a>(&self, rows: &'a [f32]) -> std::borrow::Cow<'a, [f32]> {
+        if self.privileged_size == 0 {
+            return std::borrow::Cow::Borrowed(rows);
+        }
+        let width = self.obs_size + self.privileged_size;
+        std::borrow::Cow::Owned(
+            rows.chunks_exact(width)
+                .flat_map(|row| row[..self.obs_size].iter().copied())
+                .collect(),
+        )
     }
 
     /// `A`.
@@ -94,6 +117,15 @@ impl ActorCritic {
         vars
     }
 
+    /// The actor's columns (the first `O`) of a `B x (O + P)` tensor.
+    pub fn actor_input(&self, obs: &Tensor) -> candle_core::Result<Tensor> {
+        if self.privileged_size == 0 {
+            Ok(obs.clone())
+        } else {
+            obs.narrow(1, 0, self.obs_size)
+        }
+    }
+
     /// `k x O` observations as a tensor.
     pub fn obs_tensor(&self, obs: &[f32]) -> Result<Tensor, LearnError> {
         let k = obs.len() / self.obs_size;
@@ -106,9 +138,12 @@ impl ActorCritic {
         Ok(self.actor.forward(&x)?.flatten_all()?.to_vec1()?)
     }
 
-    /// Values for `k x O` (normalised) observations, `k`.
+    /// Values for `k x (O + P)` (normalised) observations with their
+    /// privileged values, `k`.
     pub fn values(&self, obs: &[f32]) -> Result<Vec<f32>, LearnError> {
-        let x = self.obs_tensor(obs)?;
+        let width = self.obs_size + self.privileged_size;
+        let k = obs.len() / width;
+        let x = Tensor::from_slice(obs, (k, width), &self.device)?;
         Ok(self.critic.forward(&x)?.flatten_all()?.to_vec1()?)
     }
 
@@ -200,7 +235,7 @@ mod tests {
     #[test]
     fn sampled_log_probs_agree_with_the_tensor_formula() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let ac = ActorCritic::new(4, 3, &[8, 8], -0.5, &mut rng).unwrap();
+        let ac = ActorCritic::new((4, 0), 3, &[8, 8], -0.5, &mut rng).unwrap();
         let obs = [0.1f32, -0.2, 0.3, 0.4, 1.0, 0.0, -1.0, 0.5];
         let (actions, lp) = ac.sample(&obs, &mut rng).unwrap();
         let mean = ac.actor.forward(&ac.obs_tensor(&obs).unwrap()).unwrap();
@@ -216,8 +251,10 @@ mod tests {
 
     #[test]
     fn same_seed_same_networks() {
-        let a = ActorCritic::new(5, 2, &[16], -0.7, &mut ChaCha8Rng::seed_from_u64(9)).unwrap();
-        let b = ActorCritic::new(5, 2, &[16], -0.7, &mut ChaCha8Rng::seed_from_u64(9)).unwrap();
+        let a =
+            ActorCritic::new((5, 0), 2, &[16], -0.7, &mut ChaCha8Rng::seed_from_u64(9)).unwrap();
+        let b =
+            ActorCritic::new((5, 0), 2, &[16], -0.7, &mut ChaCha8Rng::seed_from_u64(9)).unwrap();
         for ((na, va), (nb, vb)) in a.named_vars().iter().zip(b.named_vars().iter()) {
             assert_eq!(na, nb);
             let x: Vec<f32> = va.as_tensor().flatten_all().unwrap().to_vec1().unwrap();

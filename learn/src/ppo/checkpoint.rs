@@ -26,6 +26,10 @@ struct StateFile {
     iteration: u64,
     seed: u64,
     obs_size: usize,
+    /// values only the critic sees, after the actor's `obs_size` (absent:
+    /// none)
+    #[serde(default, skip_serializing_if = "is_zero")]
+    privileged_size: usize,
     action_size: usize,
     adam_step: u64,
     normalizer_count: f64,
@@ -38,6 +42,10 @@ struct StateFile {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     learning_rate_now: Option<f64>,
     ppo: PpoConfig,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl Trainer {
@@ -53,6 +61,7 @@ impl Trainer {
             iteration: self.iteration,
             seed: self.seed,
             obs_size: self.policy.obs_size(),
+            privileged_size: self.policy.privileged_size(),
             action_size: self.policy.action_size(),
             adam_step: self.adam.step,
             normalizer_count: self.normalizer.count,
@@ -101,15 +110,18 @@ impl Trainer {
             &state.rng_word_pos,
         )?;
         // fresh networks of the recorded shape, then every value replaced
-        let trainer = Trainer::new(
+        let trainer = Trainer::asymmetric(
             state.ppo.clone(),
-            state.obs_size,
+            (state.obs_size, state.privileged_size),
             state.action_size,
             state.seed,
         )?;
         file.load_vars(&trainer.policy.named_vars())?;
-        let normalizer =
-            file.load_normalizer(state.obs_size, state.normalizer_count, state.ppo.obs_clip)?;
+        let normalizer = file.load_normalizer(
+            state.obs_size + state.privileged_size,
+            state.normalizer_count,
+            state.ppo.obs_clip,
+        )?;
         let learning_rate = match (state.ppo.desired_kl, state.learning_rate_now) {
             (Some(_), Some(lr)) if lr.is_finite() && lr > 0.0 => lr,
             (Some(_), Some(lr)) => {

@@ -56,7 +56,7 @@ pub fn ppo_loss(
     config: &PpoConfig,
 ) -> Result<PpoLoss, LearnError> {
     let eps = config.clip_range;
-    let mean = policy.actor.forward(&batch.obs)?;
+    let mean = policy.actor.forward(&policy.actor_input(&batch.obs)?)?;
     let log_probs = gaussian_log_prob(&mean, policy.log_std.as_tensor(), &batch.actions)?;
     let log_ratio = log_probs.sub(&batch.old_log_probs)?;
     let ratio = log_ratio.exp()?;
@@ -100,7 +100,7 @@ mod tests {
     /// A policy whose mean and value are 0 everywhere and whose log-std is 0:
     /// every weight zeroed.
     fn zero_policy() -> ActorCritic {
-        let ac = ActorCritic::new(2, 1, &[3], 0.0, &mut ChaCha8Rng::seed_from_u64(0)).unwrap();
+        let ac = ActorCritic::new((2, 0), 1, &[3], 0.0, &mut ChaCha8Rng::seed_from_u64(0)).unwrap();
         for (_, var) in ac.named_vars() {
             var.set(&var.as_tensor().zeros_like().unwrap()).unwrap();
         }

@@ -70,11 +70,11 @@ impl Settings for PpoConfig {
 
     fn build(
         &self,
-        obs_size: usize,
+        obs_size: (usize, usize),
         action_size: usize,
         seed: u64,
     ) -> Result<Box<dyn Algorithm>, LearnError> {
-        Ok(Box::new(Trainer::new(
+        Ok(Box::new(Trainer::asymmetric(
             self.clone(),
             obs_size,
             action_size,
@@ -136,7 +136,7 @@ impl Algorithm for Trainer {
             self.seed,
             (self.policy.obs_size(), self.policy.action_size()),
             self.policy.actor_vars(),
-            &self.normalizer,
+            &self.normalizer.leading(self.policy.obs_size()),
             REGISTRATION.table,
             self.config.to_table(),
         )

@@ -119,18 +119,30 @@ impl Trainer {
         action_size: usize,
         seed: u64,
     ) -> Result<Self, LearnError> {
+        Self::asymmetric(config, (obs_size, 0), action_size, seed)
+    }
+
+    /// Fresh networks whose critic also sees `privileged_size` values after
+    /// the actor's `obs_size` ([`VecEnv::policy_observation_size`]); one
+    /// normaliser covers both.
+    pub fn asymmetric(
+        config: PpoConfig,
+        (obs_size, privileged_size): (usize, usize),
+        action_size: usize,
+        seed: u64,
+    ) -> Result<Self, LearnError> {
         config.validate()?;
         check_sizes(obs_size, action_size)?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let policy = ActorCritic::new(
-            obs_size,
+            (obs_size, privileged_size),
             action_size,
             &config.hidden_sizes,
             config.init_log_std,
             &mut rng,
         )?;
         let adam = Adam::new(policy.named_vars(), config.learning_rate)?;
-        let normalizer = ObsNormalizer::new(obs_size, config.obs_clip);
+        let normalizer = ObsNormalizer::new(obs_size + privileged_size, config.obs_clip);
         Ok(Self {
             config,
             policy,
@@ -182,11 +194,24 @@ impl Trainer {
         derive_seed(self.seed, iteration)
     }
 
+    /// Raw observations `k x O` (the actor's, without privileged values)
+    /// normalised.
+    fn normalized_actor_obs(&self, raw_obs: &[f32]) -> Vec<f32> {
+        let mut obs = raw_obs.to_vec();
+        if self.policy.privileged_size() == 0 {
+            self.normalizer.normalize(&mut obs);
+        } else {
+            self.normalizer
+                .leading(self.policy.obs_size())
+                .normalize(&mut obs);
+        }
+        obs
+    }
+
     /// Deterministic actions for raw observations `k x O`: normalised, the
     /// policy mean, clipped to [-1, 1].
     pub fn act_deterministic(&self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError> {
-        let mut obs = raw_obs.to_vec();
-        self.normalizer.normalize(&mut obs);
+        let obs = self.normalized_actor_obs(raw_obs);
         let mut actions = self.policy.mean_actions(&obs)?;
         actions.iter_mut().for_each(|a| *a = a.clamp(-1.0, 1.0));
         Ok(actions)
@@ -199,8 +224,7 @@ impl Trainer {
         raw_obs: &[f32],
         rng: &mut ChaCha8Rng,
     ) -> Result<Vec<f32>, LearnError> {
-        let mut obs = raw_obs.to_vec();
-        self.normalizer.normalize(&mut obs);
+        let obs = self.normalized_actor_obs(raw_obs);
         let (mut actions, _) = self.policy.sample(&obs, rng)?;
         actions.iter_mut().for_each(|a| *a = a.clamp(-1.0, 1.0));
         Ok(actions)
@@ -208,14 +232,25 @@ impl Trainer {
 
     /// Checks that `env` fits the networks.
     fn check_env(&self, env: &dyn VecEnv) -> Result<(), LearnError> {
-        if env.observation_size() != self.policy.obs_size()
+        let (o, p) = (self.policy.obs_size(), self.policy.privileged_size());
+        if env.observation_size() != o + p
+            || env.policy_observation_size() != o
             || env.action_size() != self.policy.action_size()
         {
+            let privileged = |total: usize, policy: usize| {
+                if total == policy {
+                    String::new()
+                } else {
+                    format!(" ({policy} for the policy)")
+                }
+            };
             return Err(LearnError::Mismatch(format!(
-                "the environment has {} observations and {} actions, the policy {} and {}",
+                "the environment has {} observations{} and {} actions, the policy {}{} and {}",
                 env.observation_size(),
+                privileged(env.observation_size(), env.policy_observation_size()),
                 env.action_size(),
-                self.policy.obs_size(),
+                o + p,
+                privileged(o + p, o),
                 self.policy.action_size()
             )));
         }
@@ -277,7 +312,9 @@ impl Trainer {
             self.normalizer.update(&raw_obs);
             let mut obs = raw_obs.clone();
             self.normalizer.normalize(&mut obs);
-            let (actions, log_probs) = self.policy.sample(&obs, &mut self.rng)?;
+            let (actions, log_probs) = self
+                .policy
+                .sample(&self.policy.actor_part(&obs), &mut self.rng)?;
             let values = self.policy.values(&obs)?;
             let clipped: Vec<f32> = actions.iter().map(|x| x.clamp(-1.0, 1.0)).collect();
             inference_secs += clock.elapsed().as_secs_f64();
@@ -350,7 +387,7 @@ impl Trainer {
     /// `target_kl`; the rate moved by `desired_kl`).
     fn update(&mut self, buffer: RolloutBuffer, g: Gae) -> Result<PpoUpdate, LearnError> {
         let explained_variance = explained_variance(&buffer.values, &g.returns);
-        let o = self.policy.obs_size();
+        let o = self.policy.obs_size() + self.policy.privileged_size();
         let a = self.policy.action_size();
         let total = buffer.rewards.len();
         let device = self.policy.device().clone();

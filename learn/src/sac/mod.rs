@@ -104,10 +104,16 @@ impl Settings for SacConfig {
 
     fn build(
         &self,
-        obs_size: usize,
+        (obs_size, privileged_size): (usize, usize),
         action_size: usize,
         seed: u64,
     ) -> Result<Box<dyn Algorithm>, LearnError> {
+        if privileged_size > 0 {
+            return Err(LearnError::Config(format!(
+                "{}'s critics see what its actor sees: {privileged_size} privileged observation values (an asymmetric critic) are PPO's only",
+                self.algorithm()
+            )));
+        }
         Ok(Box::new(SacAgent::new(
             self.clone(),
             obs_size,

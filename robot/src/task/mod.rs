@@ -742,6 +742,7 @@ mod tests {
             short_history: false,
             foot_velocity: false,
             goal_line_ahead_m: None,
+            privileged_critic: false,
         };
         assert_eq!(none.size(), 30);
         assert_eq!(none.blocks().last().unwrap().1.end, 30);
@@ -1098,6 +1099,43 @@ mod tests {
         assert_eq!(at(0.2).0, goal);
         let (far, _) = at(5.0);
         assert!((far.x - 6.1).abs() < 1e-6, "{far:?}");
+    }
+
+    /// The critic's privileged values: on 5 cm tiles a standing robot's
+    /// feet all sink, by less than twice the region's standing sink (the
+    /// rear feet carry more: 4.5 cm against 1.9 cm at the front after the
+    /// reset's settle), and touch the ground; on rigid ground nothing
+    /// sinks. The policy's observation is unchanged.
+    #[test]
+    fn the_privileged_values_give_each_feet_sink_softness_and_contact() {
+        let config = TaskConfig {
+            observation: ObservationConfig {
+                privileged_critic: true,
+                ..ObservationConfig::default()
+            },
+            ..TaskConfig::default()
+        };
+        assert_eq!(config.observation_size(), 102);
+        assert_eq!(config.observation.privileged_size(), 12);
+        for (spec, sink_m) in [("elastic:5cm", 0.05f32), ("rigid", 0.0)] {
+            let mut task = task_on(spec, config.clone(), 1);
+            let mut obs = vec![0.0; task.observation_size()];
+            task.reset(&mut obs);
+            let mut privileged = vec![0.0; 12];
+            task.observe_privileged(&mut privileged);
+            for foot in privileged.chunks_exact(3) {
+                assert_eq!(foot[1], sink_m, "{spec}: {privileged:?}");
+                assert_eq!(foot[2], 1.0, "{spec}: {privileged:?}");
+                if sink_m == 0.0 {
+                    assert!(foot[0].abs() < 1e-3, "{spec}: {privileged:?}");
+                } else {
+                    assert!(
+                        foot[0] > 0.01 && foot[0] < 2.0 * sink_m,
+                        "{spec}: {privileged:?}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

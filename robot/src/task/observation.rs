@@ -31,7 +31,19 @@ pub struct ObservationConfig {
     /// docs of [`super`]), m
     #[serde(skip_serializing_if = "Option::is_none")]
     pub goal_line_ahead_m: Option<f64>,
+    /// the critic also sees, per foot (leg order: FR, FL, RR, RL), what a robot cannot
+    /// measure: the sink of the ground under the foot, the standing sink of
+    /// its region (how soft it is) and whether the foot touches the ground
+    /// ([`PRIVILEGED_SIZE`] values after the policy's observation, for an
+    /// asymmetric actor-critic; not the paper's). The policy's observation
+    /// is unchanged.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub privileged_critic: bool,
 }
+
+/// Values [`ObservationConfig::privileged_critic`] appends for the critic:
+/// 3 per foot.
+pub const PRIVILEGED_SIZE: usize = 12;
 
 /// Whether `phases` is the paper's whole foot-position history (an
 /// experiment file leaves it out then).
@@ -47,6 +59,7 @@ impl Default for ObservationConfig {
             short_history: true,
             foot_velocity: true,
             goal_line_ahead_m: None,
+            privileged_critic: false,
         }
     }
 }
@@ -88,6 +101,16 @@ impl ObservationConfig {
     /// Number of observation values with these switches.
     pub fn size(&self) -> usize {
         self.blocks().last().map_or(0, |(_, range)| range.end)
+    }
+
+    /// Number of privileged values for the critic (0 unless
+    /// `privileged_critic`).
+    pub fn privileged_size(&self) -> usize {
+        if self.privileged_critic {
+            PRIVILEGED_SIZE
+        } else {
+            0
+        }
     }
 }
 
@@ -146,6 +169,34 @@ impl Task {
         debug_assert_eq!(out.len(), size);
         for (o, v) in obs.iter_mut().zip(out) {
             *o = v as f32;
+        }
+    }
+
+    /// Writes the critic's privileged values
+    /// ([`ObservationConfig::privileged_critic`]), per foot: the sink of
+    /// the ground under it (m, positive down), its region's standing sink
+    /// (m, 0 on rigid ground) and 1 where it touches the ground, else 0.
+    pub fn observe_privileged(&self, out: &mut [f32]) {
+        let size = self.config.observation.privileged_size();
+        assert_eq!(out.len(), size, "the privileged values are {size}");
+        if size == 0 {
+            return;
+        }
+        let world = &self.world;
+        let terrain = world.terrain();
+        let touching = world.feet_touching_ground();
+        for ((foot, touches), slot) in world
+            .feet_in_world_m()
+            .iter()
+            .zip(touching)
+            .zip(out.chunks_exact_mut(3))
+        {
+            let sink_m =
+                world.rest_height_m(foot.x, foot.y) - world.surface_height_m(foot.x, foot.y);
+            let region = &terrain.regions()[terrain.region_index_at(foot.x, foot.y)];
+            slot[0] = sink_m as f32;
+            slot[1] = region.expected_sink_m as f32;
+            slot[2] = f32::from(u8::from(touches));
         }
     }
 }

@@ -13,7 +13,7 @@ use crate::LearnError;
 use crate::env::VecEnv;
 use crate::episodes::EpisodeStats;
 
-/// A learner: PPO, SAC, CrossQ, or one a user registers.
+/// A learner: PPO, SAC, CrossQ, or one added to [`crate::registry::ALGORITHMS`].
 pub trait Algorithm: Send {
     /// Its registered name ([`crate::registry::Registration::name`]).
     fn name(&self) -> &'static str;
@@ -24,7 +24,8 @@ pub trait Algorithm: Send {
     /// Environment steps per environment per iteration.
     fn steps_per_env(&self) -> usize;
 
-    /// Observation values the networks take.
+    /// Observation values the policy takes (without any privileged values
+    /// only a critic sees, [`crate::VecEnv::policy_observation_size`]).
     fn obs_size(&self) -> usize;
 
     /// Action values the networks give.

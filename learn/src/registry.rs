@@ -26,8 +26,6 @@ pub type PolicyLoader = fn(&Path, PolicyFile) -> Result<Box<dyn Algorithm>, Lear
 pub struct Registration {
     /// the name in experiment files and on the command line
     pub name: &'static str,
-    /// one line for help texts
-    pub about: &'static str,
     /// the experiment file's table of its settings (CrossQ shares SAC's
     /// `[sac]`)
     pub table: &'static str,

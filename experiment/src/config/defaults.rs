@@ -49,9 +49,10 @@ pub(super) fn resolve_learner(
     algo: &'static Registration,
     table: Option<&toml::Table>,
 ) -> Result<Box<dyn Settings>, String> {
-    let mut merged = match algo.table {
-        "ppo" => default_ppo().to_table(),
-        _ => toml::Table::new(),
+    let mut merged = if algo.table == learn::ppo::REGISTRATION.table {
+        default_ppo().to_table()
+    } else {
+        toml::Table::new()
     };
     if let Some(table) = table {
         merged.extend(table.clone());

@@ -327,16 +327,12 @@ impl AlgoTables {
         algo: &'static Registration,
     ) -> Result<BTreeMap<&'static str, Box<dyn Settings>>> {
         let mut settings = BTreeMap::new();
-        for table in registry::tables() {
-            let reader = if algo.table == table {
-                algo
-            } else {
-                registry::ALGORITHMS
-                    .iter()
-                    .copied()
-                    .find(|r| r.table == table)
-                    .expect("a listed table has an algorithm")
-            };
+        for first in registry::ALGORITHMS {
+            let table = first.table;
+            if settings.contains_key(table) {
+                continue;
+            }
+            let reader = if algo.table == table { algo } else { first };
             let resolved = resolve_learner(reader, self.0.get(table))
                 .map_err(|e| anyhow!("[{table}]: {e}"))?;
             settings.insert(table, resolved);

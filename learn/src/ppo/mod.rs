@@ -40,7 +40,6 @@ use crate::settings::{Settings, SettingsValue, overlay};
 /// PPO's entry in [`crate::registry::ALGORITHMS`].
 pub static REGISTRATION: Registration = Registration {
     name: "ppo",
-    about: "proximal policy optimisation (the paper's learner)",
     table: "ppo",
     settings: settings_from_table,
     format: "ppo",

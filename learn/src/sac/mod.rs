@@ -46,7 +46,6 @@ use crate::settings::{Settings, SettingsValue, overlay};
 /// SAC's entry in [`crate::registry::ALGORITHMS`].
 pub static REGISTRATION: Registration = Registration {
     name: "sac",
-    about: "soft actor-critic",
     table: "sac",
     settings: |table| settings_over(SacConfig::default(), table),
     format: checkpoint::ALGO,
@@ -57,7 +56,6 @@ pub static REGISTRATION: Registration = Registration {
 /// CrossQ's entry in [`crate::registry::ALGORITHMS`].
 pub static CROSSQ_REGISTRATION: Registration = Registration {
     name: "crossq",
-    about: "soft actor-critic with CrossQ's critics and settings",
     table: "sac",
     settings: |table| {
         let settings = settings_over(SacConfig::crossq(), table)?;

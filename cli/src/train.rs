@@ -124,6 +124,13 @@ impl TrainObserver for Terminal {
         eprintln!("curriculum stage {}: {terrain}{rate}{task}", stage + 1);
     }
 
+    fn stage_ready(&mut self, stage: usize, iterations: u64, survival: f64) {
+        eprintln!(
+            "curriculum stage {} ready after {iterations} iterations (the last window's episodes survived at {survival} or more)",
+            stage + 1
+        );
+    }
+
     fn iteration_done(&mut self, report: &IterationReport) -> Result<()> {
         if self.json {
             out!("{}", report.record);

@@ -57,11 +57,25 @@ impl Policy {
         };
         let learner =
             learn::registry::load_for_acting(&dir).with_context(|| format!("policy {arg}"))?;
-        let config = crate::config::Experiment::from_file(
+        let mut config = crate::config::Experiment::from_file(
             &dir.join(crate::train::run_dir::CONFIG_FILE),
             registry,
         )
         .with_context(|| format!("policy {arg}"))?;
+        if config.has_advance_rules() {
+            // where its stages ended, from the run's metrics beside it
+            let run = if learn::export::is_exported_policy(&dir) {
+                Some(dir.clone())
+            } else {
+                crate::train::run_dir::run_dir_of(&dir)
+            };
+            let metrics = run
+                .map(|r| r.join(crate::train::run_dir::METRICS_FILE))
+                .with_context(|| format!("policy {arg}: its curriculum moves on when ready, and no run directory beside it tells where its stages ended"))?;
+            config
+                .decide_stages_from(&metrics, learner.iteration())
+                .with_context(|| format!("policy {arg}"))?;
+        }
         // the task of the stage the policy's last iteration trained in
         let task = config
             .task_at(learner.iteration().saturating_sub(1))

@@ -48,20 +48,32 @@ impl Recipe {
     /// One line on what the recipe does, from its stages (consecutive
     /// stages on one terrain counted together).
     pub fn describe(&self, experiment: &Experiment) -> String {
-        let mut runs: Vec<(String, u64)> = Vec::new();
+        // consecutive fixed stages on one terrain read as one
+        let mut runs: Vec<(String, u64, Option<f64>)> = Vec::new();
         for stage in &experiment.curriculum {
             let terrain = stage.terrain.to_string();
+            let survival = stage.advance.map(|rule| rule.survival);
             match runs.last_mut() {
-                Some((last, n)) if *last == terrain => *n += stage.iterations,
-                _ => runs.push((terrain, stage.iterations)),
+                Some((last, n, None)) if *last == terrain && survival.is_none() => {
+                    *n += stage.iterations
+                }
+                _ => runs.push((terrain, stage.iterations, survival)),
             }
         }
         let stages: Vec<String> = runs
             .iter()
-            .map(|(terrain, n)| format!("{terrain} x{n}"))
+            .map(|(terrain, n, survival)| match survival {
+                None => format!("{terrain} x{n}"),
+                Some(s) => format!("{terrain} x{n} at most (until {s} of episodes survive)"),
+            })
             .collect();
+        let at_most = if experiment.has_advance_rules() {
+            "at most "
+        } else {
+            ""
+        };
         format!(
-            "{}: quadwalk's recipe ({}): {} ({} iterations); a --config whose [terrain] spec is {:?} trains without it",
+            "{}: quadwalk's recipe ({}): {} ({at_most}{} iterations); a --config whose [terrain] spec is {:?} trains without it",
             self.terrain,
             self.path,
             stages.join(" -> "),

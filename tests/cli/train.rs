@@ -421,6 +421,74 @@ fn a_fork_ends_as_the_run_from_scratch_and_refuses_a_checkpoint_it_does_not_repr
     assert!(err.contains("--fork") && err.contains("--resume"), "{err}");
 }
 
+/// `[curriculum.advance]`: a stage ends after the first iteration whose
+/// window of episodes reaches its survival (here 1-phase episodes that
+/// do not fall, over 2 iterations), before its maximum; the next stage
+/// starts there; a run resumed inside the undecided stage, or at the
+/// boundary, decides it from its metrics as the uninterrupted run did; a
+/// fork from the boundary goes on alike; its exported policy acts.
+#[test]
+fn a_stage_that_moves_on_when_ready_ends_early_and_resumes_and_forks_exactly() {
+    let stage_1 = "[[curriculum]]\nterrain = \"rigid\"\niterations = 6\n[curriculum.task]\nmax_phases = 1\n[curriculum.advance]\nsurvival = 1.0\nwindow = 2\n";
+    let runs = TwoStages::new("advance", "");
+    let text = std::fs::read_to_string(&runs.config)
+        .unwrap()
+        .replacen(
+            "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n",
+            stage_1,
+            1,
+        )
+        .replace("[train]\n", "[train]\nkeep_checkpoints = 20\n");
+    std::fs::write(&runs.config, &text).unwrap();
+    let log = runs.train(&runs.a);
+    let metrics = metrics_without_timing(&runs.a);
+    // where the rule says stage 1 ends, from the recorded counts
+    let survived = |m: &Value| m["terminated"] == 0 && m["episodes"].as_u64().unwrap() > 0;
+    let ready = (2..=6)
+        .find(|&n| metrics[n - 2..n].iter().all(survived))
+        .expect("1-phase episodes survive within 6 iterations");
+    assert!(ready < 6, "the stage ends before its maximum: {metrics:?}");
+    assert!(
+        log.contains(&format!(
+            "curriculum stage 1 ready after {ready} iterations"
+        )),
+        "{log}"
+    );
+    assert_eq!(metrics.len(), ready + 2, "stage 2's 2 iterations follow");
+    let lengths: Vec<f64> = metrics
+        .iter()
+        .map(|m| m["mean_episode_length"].as_f64().unwrap())
+        .collect();
+    assert!(lengths[..ready].iter().all(|&l| l == 1.0), "{lengths:?}");
+    assert!(lengths[ready..].iter().all(|&l| l > 1.0), "{lengths:?}");
+
+    // resumed inside stage 1 (undecided) and at its end
+    for from in [1, ready] {
+        let b = &runs.b;
+        let _ = std::fs::remove_dir_all(b);
+        runs.train(b);
+        let checkpoint = b.join(format!("checkpoints/iter-{from:06}"));
+        for later in from + 1..=ready + 2 {
+            let _ = std::fs::remove_dir_all(b.join(format!("checkpoints/iter-{later:06}")));
+        }
+        resume_from(&checkpoint);
+        assert_eq!(weights(&runs.a), weights(b), "resumed from {from}");
+        assert_eq!(metrics_without_timing(b), metrics, "resumed from {from}");
+    }
+
+    // a fork from the boundary, and the policy it ends with
+    let forked = runs.a.with_file_name("forked");
+    let boundary = runs.a.join(format!("checkpoints/iter-{ready:06}"));
+    ok(&runs.args(&forked, &["--fork", s(&boundary)]));
+    assert_eq!(weights(&runs.a), weights(&forked));
+    let policy = runs.a.with_file_name("policy");
+    ok(&["export", "--checkpoint", s(&runs.a), "--out", s(&policy)]);
+    let rollout = json_of(&[
+        "rollout", "--policy", s(&policy), "--terrain", "rigid", "--phases", "2", "--json",
+    ]);
+    assert_eq!(rollout["phases"], 2);
+}
+
 /// `export --with-checkpoint`: the exported policy carries its checkpoint,
 /// byte for byte, and a fork from it ends as the fork from the run's own
 /// checkpoint, with the run's metrics up to it.

@@ -8,6 +8,7 @@ use serde::Deserialize;
 use terrain_plugins::{Registry, TerrainSpec};
 
 use super::Experiment;
+use super::advance::{Advance, AdvanceSection};
 use super::defaults::resolve_task;
 
 /// One curriculum stage.
@@ -15,8 +16,14 @@ use super::defaults::resolve_task;
 pub struct Stage {
     /// the terrain of this stage
     pub terrain: TerrainSpec,
-    /// iterations in this stage
+    /// iterations in this stage; with `advance`, at most
     pub iterations: u64,
+    /// moving on when the policy is ready (`[curriculum.advance]`)
+    pub advance: Option<Advance>,
+    /// where the `advance` rule ended the stage, iterations into it, once a
+    /// run's history has decided it ([`Experiment::decide_stages`]); not
+    /// part of the file
+    pub ended_after: Option<u64>,
     /// the learner's learning rate in this stage (`None`: the `[ppo]` or
     /// `[sac]` one)
     pub learning_rate: Option<f64>,
@@ -36,6 +43,16 @@ struct StageSection {
     learning_rate: Option<f64>,
     #[serde(default)]
     task: Option<toml::Table>,
+    #[serde(default)]
+    advance: Option<AdvanceSection>,
+}
+
+impl Stage {
+    /// The stage's iterations: where its `advance` rule ended it, else its
+    /// `iterations`.
+    pub fn length(&self) -> u64 {
+        self.ended_after.unwrap_or(self.iterations)
+    }
 }
 
 /// `[curriculum.task]` keys that would change the networks' input (the
@@ -43,12 +60,15 @@ struct StageSection {
 const FIXED_TASK_KEYS: [&str; 2] = ["observation", "action_prior"];
 
 impl Experiment {
-    /// Total training iterations: the curriculum's sum, else `train.iterations`.
+    /// Total training iterations: the curriculum's sum, else
+    /// `train.iterations`. A stage with an `advance` rule counts where it
+    /// ended once decided, else its `iterations`: the total is then at most
+    /// this.
     pub fn total_iterations(&self) -> u64 {
         if self.curriculum.is_empty() {
             self.train.iterations
         } else {
-            self.curriculum.iter().map(|s| s.iterations).sum()
+            self.curriculum.iter().map(Stage::length).sum()
         }
     }
 
@@ -72,6 +92,9 @@ impl Experiment {
             let keep = left > 0;
             stage.iterations = stage.iterations.min(left);
             left -= stage.iterations;
+            if let Some(rule) = &mut stage.advance {
+                rule.window = rule.window.min(stage.iterations.max(1));
+            }
             keep
         });
         Ok(())
@@ -81,7 +104,7 @@ impl Experiment {
     pub fn terrain_at(&self, iteration: u64) -> (usize, &TerrainSpec) {
         let mut end = 0;
         for (k, stage) in self.curriculum.iter().enumerate() {
-            end += stage.iterations;
+            end += stage.length();
             if iteration < end {
                 return (k, &stage.terrain);
             }
@@ -201,11 +224,23 @@ pub(super) fn curriculum_from_doc(
                     )
                 })?)
             };
+            let advance = stage
+                .advance
+                .map(|rule| rule.resolve(stage.iterations))
+                .transpose()
+                .map_err(|e| {
+                    anyhow!(
+                        "config {source} [[curriculum]] stage {} [curriculum.advance]: {e}",
+                        k + 1
+                    )
+                })?;
             Ok(Stage {
                 terrain: registry
                     .parse(&stage.terrain)
                     .with_context(|| format!("config {source} [[curriculum]] stage {}", k + 1))?,
                 iterations: stage.iterations,
+                advance,
+                ended_after: None,
                 learning_rate: stage.learning_rate,
                 task_overrides,
                 task,

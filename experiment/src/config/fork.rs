@@ -11,7 +11,10 @@ impl Experiment {
     /// worlds and the seed, and for every iteration before `iterations` its
     /// terrain, task and learning rate. Not compared: what does not change
     /// the training (checkpoint cadence, Rerun environments, the stages'
-    /// layout beyond what each iteration runs).
+    /// layout beyond what each iteration runs). Stages that move on when
+    /// ready are compared where the run's history ended them: both
+    /// experiments must have decided their stages from it
+    /// ([`Experiment::decide_stages`]).
     pub fn differs_before(&self, other: &Experiment, iterations: u64) -> Option<String> {
         if self.algo != other.algo {
             return Some(format!(
@@ -51,7 +54,7 @@ impl Experiment {
             e.curriculum
                 .iter()
                 .scan(0, |end, stage| {
-                    *end += stage.iterations;
+                    *end += stage.length();
                     Some(*end)
                 })
                 .collect::<Vec<u64>>()

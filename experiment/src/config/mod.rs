@@ -35,6 +35,9 @@
 //! [curriculum.task]       # optional: [task] keys for this stage only, on top of
 //! max_paid_progress_m = 0.03  # [task] (not observation or action_prior: the
 //!                         # networks' input is fixed for a run)
+//! [curriculum.advance]    # optional: end the stage when the policy is ready,
+//! survival = 0.95         # iterations then at most (see `advance`)
+//! window = 10
 //! ```
 //!
 //! `[task]` is `robot::task::TaskConfig` and `[physics]` `robot::WorldConfig`,
@@ -72,6 +75,7 @@ use robot::task::TaskConfig;
 use serde::{Deserialize, Serialize};
 use terrain_plugins::{Registry, TerrainSpec};
 
+pub mod advance;
 mod curriculum;
 mod defaults;
 mod fork;
@@ -297,6 +301,12 @@ impl Experiment {
             ));
             if let Some(rate) = stage.learning_rate {
                 text.push_str(&format!("learning_rate = {rate:?}\n"));
+            }
+            if let Some(rule) = &stage.advance {
+                text.push_str(&format!(
+                    "\n[curriculum.advance]\nsurvival = {:?}\nwindow = {}\n",
+                    rule.survival, rule.window
+                ));
             }
             if !stage.task_overrides.is_empty() {
                 text.push_str("\n[curriculum.task]\n");

@@ -29,6 +29,8 @@ use viz::RolloutLogger;
 pub use plan::RunPlan;
 use run_dir::{CONFIG_FILE, METRICS_FILE, append_line, keep_metrics_up_to, save_checkpoint};
 
+use crate::config::Experiment;
+use crate::config::advance;
 use crate::task_env::TaskEnv;
 
 /// How a run began, told once before its first iteration.
@@ -77,6 +79,10 @@ pub trait TrainObserver {
         _task_overrides: &toml::Table,
     ) {
     }
+    /// A stage's `[curriculum.advance]` rule was reached after `iterations`
+    /// of its iterations (before its maximum): the next iteration starts the
+    /// next stage.
+    fn stage_ready(&mut self, _stage: usize, _iterations: u64, _survival: f64) {}
     /// After each iteration, once its metrics line is written.
     fn iteration_done(&mut self, _report: &IterationReport) -> Result<()> {
         Ok(())
@@ -122,20 +128,13 @@ pub fn train(
     stop: Arc<AtomicBool>,
 ) -> Result<TrainOutcome> {
     let RunPlan {
-        experiment,
+        mut experiment,
         run_dir,
         learner: mut trainer,
         threads,
         fork,
     } = plan;
-    let total = experiment.total_iterations();
     let start_iteration = trainer.iteration();
-    if start_iteration >= total {
-        bail!(
-            "the run in {} has done {start_iteration} of {total} iterations already; pass a larger --iterations to go on",
-            run_dir.display()
-        );
-    }
     fs::create_dir_all(run_dir.join("checkpoints"))
         .with_context(|| format!("cannot create the run directory {}", run_dir.display()))?;
     remove_partial_saves(&run_dir);
@@ -153,22 +152,37 @@ pub fn train(
     }
     let metrics_path = run_dir.join(METRICS_FILE);
     keep_metrics_up_to(&metrics_path, start_iteration)?;
+    // the episode counts of the iterations done, from which stages that
+    // move on when ready are decided
+    let mut history = if experiment.has_advance_rules() && start_iteration > 0 {
+        advance::read_history(&metrics_path, start_iteration)?
+    } else {
+        Vec::new()
+    };
+    experiment.decide_stages(&history);
+    if start_iteration >= experiment.total_iterations() {
+        bail!(
+            "the run in {} has done {start_iteration} of {} iterations already; pass a larger --iterations to go on",
+            run_dir.display(),
+            experiment.total_iterations()
+        );
+    }
     let latest = run_dir.join(learn::checkpoint::LATEST_LINK);
 
     // the worlds of 0-based iteration `iteration`: its stage's terrain and task
-    let build_env = |iteration| {
+    let build_env = |experiment: &Experiment, iteration| {
         TaskEnv::new(
             registry,
             experiment.terrain_at(iteration).1,
             experiment.task_at(iteration),
             model,
-            &experiment,
+            experiment,
             threads,
             stop.clone(),
         )
     };
     let mut stage = experiment.terrain_at(start_iteration).0;
-    let mut env = build_env(start_iteration)?;
+    let mut env = build_env(&experiment, start_iteration)?;
     for (e, logger) in loggers {
         env.attach_logger(e, logger);
     }
@@ -183,19 +197,21 @@ pub fn train(
     });
     let started = Instant::now();
     let mut phases_done = 0usize;
-    for iteration in start_iteration..total {
+    let mut iteration = start_iteration;
+    while iteration < experiment.total_iterations() {
         let (next_stage, terrain) = experiment.terrain_at(iteration);
+        let terrain = terrain.clone();
         let stage_rate = experiment.learning_rate_at(iteration);
         if next_stage != stage {
             let loggers = env.detach_loggers();
-            env = build_env(iteration)?;
+            env = build_env(&experiment, iteration)?;
             for l in loggers {
                 env.attach_logger(l.env, l.logger);
             }
             stage = next_stage;
             observer.stage_started(
                 stage,
-                terrain,
+                &terrain,
                 stage_rate,
                 &experiment.curriculum[stage].task_overrides,
             );
@@ -228,8 +244,23 @@ pub fn train(
         }
         let logging_secs = env.take_logging_secs();
         phases_done += stats.steps;
-        let record = metrics::record(&stats, terrain, logging_secs);
+        let record = metrics::record(&stats, &terrain, logging_secs);
         append_line(&metrics_path, &record.to_string())?;
+        if experiment.has_advance_rules() {
+            history.push(
+                advance::EpisodeCounts::of_record(&record)
+                    .context("a metrics line without episode counts")?,
+            );
+            experiment.decide_stages(&history);
+            let current = &experiment.curriculum[stage];
+            if let (Some(rule), Some(n)) = (current.advance, current.ended_after)
+                && n < current.iterations
+                && experiment.terrain_at(iteration + 1).0 != stage
+            {
+                observer.stage_ready(stage, n, rule.survival);
+            }
+        }
+        let total = experiment.total_iterations();
         let curves = metrics::curves(&stats);
         for l in env.loggers_mut() {
             l.logger.log_training(stats.iteration as i64, &curves);
@@ -245,6 +276,7 @@ pub fn train(
             phases_done,
         })?;
         let done = stats.iteration;
+        iteration = done;
         if done % experiment.train.checkpoint_every == 0 || done == total {
             save_checkpoint(
                 &run_dir,
@@ -257,7 +289,7 @@ pub fn train(
     }
     finish_loggers(&mut env, observer);
     Ok(TrainOutcome::Completed {
-        iterations: total,
+        iterations: iteration,
         checkpoint: latest,
     })
 }

@@ -13,6 +13,7 @@ use terrain_plugins::Registry;
 
 use super::run_dir::{CONFIG_FILE, METRICS_FILE, run_dir_of};
 use crate::config::Experiment;
+use crate::config::advance::read_history;
 
 /// A run, resolved: [`super::train`] runs it.
 pub struct RunPlan {
@@ -137,9 +138,24 @@ fn fork_from(
     let checkpoint = resolve_checkpoint(fork).with_context(context)?;
     let checkpoint = fs::canonicalize(&checkpoint).unwrap_or(checkpoint);
     let learner = load_checkpoint(&checkpoint).with_context(context)?;
-    let forked =
+    let mut forked =
         Experiment::from_file(&checkpoint.join(CONFIG_FILE), registry).with_context(context)?;
     let done = learner.iteration();
+    // stages that move on when ready, decided by the checkpoint's history
+    let mut experiment = experiment.clone();
+    if experiment.has_advance_rules() || forked.has_advance_rules() {
+        let metrics = run_dir_of(&checkpoint)
+            .map(|run| run.join(METRICS_FILE))
+            .with_context(|| {
+                format!(
+                    "--fork {}: a curriculum that moves on when ready needs the checkpoint's run directory (its metrics.jsonl tells where the stages ended)",
+                    fork.display()
+                )
+            })?;
+        let history = read_history(&metrics, done).with_context(context)?;
+        experiment.decide_stages(&history);
+        forked.decide_stages(&history);
+    }
     if let Some(difference) = experiment.differs_before(&forked, done) {
         bail!(
             "--fork {}: the checkpoint's run trained its {done} iterations otherwise than this config would: {difference} (this config against the checkpoint's); a fork goes on only from a checkpoint that this config reproduces",

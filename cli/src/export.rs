@@ -2,7 +2,7 @@
 //! checkpoint: the actor and normaliser (`learn::export`), the experiment
 //! it was trained in (`config.toml`), and the run's `metrics.jsonl` up to the
 //! exported iteration; with `--with-checkpoint`, the checkpoint itself in
-//! `checkpoint/`. `rollout`, `play` and `eval` take the directory as a
+//! `checkpoint/`; with `--onnx`, the deterministic actor as `policy.onnx`. `rollout`, `play` and `eval` take the directory as a
 //! policy; `train --resume` refuses it, and `train --fork OUT/checkpoint`
 //! goes on from its checkpoint.
 
@@ -28,7 +28,14 @@ pub struct ExportArgs {
     /// OUT/checkpoint` goes on from it exactly as from the run
     #[arg(long)]
     with_checkpoint: bool,
+    /// Also write the deterministic actor as one ONNX graph,
+    /// OUT/policy.onnx (see `quadwalk onnx`)
+    #[arg(long)]
+    onnx: bool,
 }
+
+/// The exported policy's ONNX graph (`export --onnx`).
+pub const ONNX_FILE: &str = "policy.onnx";
 
 /// The folder of an exported policy that holds its checkpoint
 /// (`export --with-checkpoint`).
@@ -102,6 +109,15 @@ pub fn export(registry: &terrain_plugins::Registry, args: &ExportArgs) -> Result
                 std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
             files.push((format!("{CHECKPOINT_DIR}/{name}"), bytes));
         }
+    }
+    if args.onnx {
+        let graph = learner
+            .actor_graph()
+            .with_context(|| format!("--checkpoint {}: --onnx", args.checkpoint.display()))?;
+        files.push((
+            ONNX_FILE.to_string(),
+            graph.to_onnx(env!("CARGO_PKG_VERSION"))?,
+        ));
     }
     write_dir_atomically(&args.out, &files)?;
     let bytes: usize = files.iter().map(|(_, b)| b.len()).sum();

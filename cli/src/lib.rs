@@ -37,6 +37,7 @@ mod bench;
 mod commands;
 mod eval;
 mod export;
+mod onnx;
 mod results;
 mod rollout;
 mod train;
@@ -180,6 +181,8 @@ enum Command {
     Results(results::ResultsArgs),
     /// Write a trained policy for use or shipping: actor, normaliser, config and metrics, without optimiser state.
     Export(export::ExportArgs),
+    /// Write a trained policy's deterministic actor (normaliser, network, action bound) as one ONNX graph.
+    Onnx(onnx::OnnxArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -230,6 +233,7 @@ fn run_command(
         Command::Bench(args) => done(bench::run(registry, &args)),
         Command::Results(args) => done(results::results(registry, &args)),
         Command::Export(args) => done(export::export(registry, &args)),
+        Command::Onnx(args) => done(onnx::onnx(registry, &args)),
     }
 }
 

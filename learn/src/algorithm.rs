@@ -57,6 +57,10 @@ pub trait Algorithm: Send {
     /// The exported policy's files ([`crate::export`]): what acting needs,
     /// nothing else.
     fn policy_files(&self) -> Result<Vec<(String, Vec<u8>)>, LearnError>;
+
+    /// The deterministic actor as [`crate::onnx`] writes it: normaliser,
+    /// network and action bound, computing what `act_deterministic` does.
+    fn actor_graph(&self) -> Result<crate::onnx::ActorGraph, LearnError>;
 }
 
 /// Checks the network sizes a new learner is asked for.

@@ -31,6 +31,7 @@ pub mod episodes;
 pub mod export;
 pub mod mlp;
 pub mod normalizer;
+pub mod onnx;
 pub mod optim;
 pub mod ppo;
 pub mod registry;

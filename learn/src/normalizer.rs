@@ -70,6 +70,11 @@ impl ObsNormalizer {
         }
     }
 
+    /// The per-dimension divisor, `sqrt(var + 1e-8)`.
+    pub fn std(&self) -> Vec<f64> {
+        self.var.iter().map(|v| (v + EPSILON).sqrt()).collect()
+    }
+
     /// Normalises `k x size` observations in place.
     pub fn normalize(&self, obs: &mut [f32]) {
         let size = self.size();

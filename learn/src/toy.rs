@@ -304,6 +304,58 @@ mod tests {
     /// An asymmetric critic: the critic sees the privileged value, the
     /// actor and every exported or acting path only the first 4; it learns,
     /// resumes bit for bit, and its export acts as it does.
+    /// The ONNX actor graph computes the learner's deterministic action
+    /// (its reference evaluation, within float rounding): PPO with an
+    /// asymmetric critic (the actor alone, the normaliser's leading part)
+    /// and SAC (the mean head, squashed), both after some training so the
+    /// normaliser and weights are not their initial values.
+    #[test]
+    fn the_actor_graph_acts_as_the_learner_does() {
+        use crate::algorithm::Algorithm;
+        use crate::sac::{SacAgent, SacConfig};
+        let mut ppo = Trainer::asymmetric(toy_config(), (4, 1), 2, 5).unwrap();
+        let mut env = PointMass::with_time_for_critic(16, 25);
+        for _ in 0..5 {
+            ppo.iterate(&mut env).unwrap();
+        }
+        let mut sac = SacAgent::new(
+            SacConfig {
+                hidden_sizes: vec![32, 32],
+                learning_starts: 200,
+                steps_per_env: 25,
+                ..SacConfig::default()
+            },
+            4,
+            2,
+            5,
+        )
+        .unwrap();
+        let mut env = PointMass::new(16, 25);
+        for _ in 0..3 {
+            sac.iterate(&mut env).unwrap();
+        }
+        // a grid of observations, some far outside what training saw
+        let obs: Vec<f32> = (0..200)
+            .flat_map(|k| {
+                let t = k as f32 * 0.37;
+                [t.sin() * 2.0, t.cos(), (t * 0.5).sin() * 40.0, -t * 0.1]
+            })
+            .collect();
+        for learner in [&ppo as &dyn Algorithm, &sac] {
+            let graph = learner.actor_graph().unwrap();
+            assert_eq!((graph.obs_size(), graph.action_size()), (4, 2));
+            let expected = learner.act_deterministic(&obs).unwrap();
+            let got = graph.act(&obs);
+            let worst = expected
+                .iter()
+                .zip(&got)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f32::max);
+            assert!(worst < 1e-6, "{}: {worst}", learner.name());
+            assert!(expected.iter().any(|a| a.abs() > 0.05), "{expected:?}");
+        }
+    }
+
     #[test]
     fn an_asymmetric_critic_learns_resumes_and_exports_the_actor_alone() {
         use crate::algorithm::Algorithm;

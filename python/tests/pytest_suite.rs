@@ -8,7 +8,8 @@
 //! (`target/python-package/quadwalk`: `pysrc/quadwalk` and the module as
 //! `_quadwalk.abi3.so`), makes a virtual environment there once
 //! (`target/pyenv`), installs what the tests import (numpy, gymnasium,
-//! pytest, and for the trainer tests torch, Stable-Baselines3 and Ray RLlib;
+//! pytest, for the trainer tests torch, Stable-Baselines3 and Ray RLlib, and
+//! for the ONNX tests onnx and onnxruntime;
 //! pip needs PyPI the first time) and runs pytest against the `quadwalk`
 //! binary built by the same `cargo test --workspace`.
 //!
@@ -17,16 +18,19 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// What the tests import besides the package: its own dependencies and the
-/// trainers (`pyproject.toml`'s `test`, `sb3` and `rllib` extras).
+/// What the tests import besides the package: its own dependencies, the
+/// trainers and ONNX (`pyproject.toml`'s `test`, `sb3`, `rllib` and `onnx`
+/// extras).
 /// RLlib 2.5x pins gymnasium 1.2.x; the package accepts 1.0 to 1.4.
-const TEST_REQUIREMENTS: [&str; 6] = [
+const TEST_REQUIREMENTS: [&str; 8] = [
     "numpy>=1.23",
     "gymnasium>=1.0,<1.3",
     "pytest>=7",
     "stable-baselines3>=2.3,<3",
     "ray[rllib]>=2.50,<3",
     "torch>=2.3,<3",
+    "onnx>=1.15,<2",
+    "onnxruntime>=1.17,<2",
 ];
 
 /// The directory that holds this test's executable, `target/<profile>/deps`,

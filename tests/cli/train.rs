@@ -484,7 +484,14 @@ fn a_stage_that_moves_on_when_ready_ends_early_and_resumes_and_forks_exactly() {
     let policy = runs.a.with_file_name("policy");
     ok(&["export", "--checkpoint", s(&runs.a), "--out", s(&policy)]);
     let rollout = json_of(&[
-        "rollout", "--policy", s(&policy), "--terrain", "rigid", "--phases", "2", "--json",
+        "rollout",
+        "--policy",
+        s(&policy),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--json",
     ]);
     assert_eq!(rollout["phases"], 2);
 }
@@ -785,7 +792,42 @@ fn crossq_trains_and_exported_policies_act_as_their_checkpoints() {
         assert!(err.contains("exported policy"), "{err}");
         let err = failure(&["export", "--checkpoint", s(run), "--out", s(&out)], 1);
         assert!(err.contains("already exists"), "{err}");
+        // the ONNX graph: `export --onnx` and `quadwalk onnx` of the
+        // exported policy write the same model (onnxruntime's actions are
+        // tested in python/tests/test_onnx.py)
+        let with_onnx = dir.join(format!("{name}-onnx"));
+        ok(&[
+            "export",
+            "--checkpoint",
+            s(run),
+            "--out",
+            s(&with_onnx),
+            "--onnx",
+        ]);
+        let graph = dir.join(format!("{name}.onnx"));
+        let said =
+            String::from_utf8(quadwalk(&["onnx", "--policy", s(&out), "--out", s(&graph)]).stdout)
+                .unwrap();
+        assert!(said.contains("input `observation`"), "{said}");
+        assert_eq!(
+            std::fs::read(&graph).unwrap(),
+            std::fs::read(with_onnx.join("policy.onnx")).unwrap(),
+            "{name}"
+        );
+        let err = failure(&["onnx", "--policy", s(&out), "--out", s(&graph)], 1);
+        assert!(err.contains("already exists"), "{err}");
     }
+    let err = failure(
+        &[
+            "onnx",
+            "--policy",
+            "scripted",
+            "--out",
+            s(&dir.join("crawl.onnx")),
+        ],
+        1,
+    );
+    assert!(err.contains("scripted crawl is not a network"), "{err}");
     let err = failure(
         &[
             "export",

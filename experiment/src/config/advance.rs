@@ -120,15 +120,14 @@ pub fn read_history(path: &Path, iterations: u64) -> Result<Vec<EpisodeCounts>> 
             bail!("{} line {}: no iteration", path.display(), n + 1);
         };
         if (1..=iterations).contains(&iteration) {
-            history[iteration as usize - 1] = Some(EpisodeCounts::of_record(&record).with_context(
-                || {
+            history[iteration as usize - 1] =
+                Some(EpisodeCounts::of_record(&record).with_context(|| {
                     format!(
                         "{} line {}: no episodes/terminated counts",
                         path.display(),
                         n + 1
                     )
-                },
-            )?);
+                })?);
         }
     }
     history
@@ -276,7 +275,11 @@ mod tests {
         assert_eq!(lengths(&e), [5, 4, 2]);
         history.extend(counts(&[(10, 1), (0, 0)]));
         e.decide_stages(&history);
-        assert_eq!(lengths(&e), [5, 2, 2], "a window with no ended episode had no fall");
+        assert_eq!(
+            lengths(&e),
+            [5, 2, 2],
+            "a window with no ended episode had no fall"
+        );
     }
 
     #[test]
@@ -284,13 +287,24 @@ mod tests {
         let e = ready();
         let again = Experiment::from_toml_builtin(&e.to_toml(), "again.toml").unwrap();
         assert_eq!(again.curriculum, e.curriculum);
-        assert!(e.to_toml().contains("[curriculum.advance]\nsurvival = 0.9\nwindow = 2\n"));
+        assert!(
+            e.to_toml()
+                .contains("[curriculum.advance]\nsurvival = 0.9\nwindow = 2\n")
+        );
         let default_window = READY.replace("window = 2\n", "");
         let e = Experiment::from_toml_builtin(&default_window, "w.toml").unwrap();
         assert_eq!(e.curriculum[0].advance.unwrap().window, 5);
         for (from, to, message) in [
-            ("survival = 0.9", "survival = 1.2", "stage 1 [curriculum.advance]: survival must be in (0, 1]"),
-            ("window = 2", "window = 6", "stage 1 [curriculum.advance]: window must be 1 to the stage's 5 iterations, got 6"),
+            (
+                "survival = 0.9",
+                "survival = 1.2",
+                "stage 1 [curriculum.advance]: survival must be in (0, 1]",
+            ),
+            (
+                "window = 2",
+                "window = 6",
+                "stage 1 [curriculum.advance]: window must be 1 to the stage's 5 iterations, got 6",
+            ),
             ("window = 2", "windows = 2", "unknown field `windows`"),
         ] {
             let err = format!(
@@ -311,14 +325,17 @@ mod tests {
             "{\"iteration\":1,\"episodes\":16,\"terminated\":3}\n{\"iteration\":2,\"episodes\":16,\"terminated\":0}\n{\"iteration\":3,\"episodes\":17,\"terminated\":1}\n",
         )
         .unwrap();
-        assert_eq!(
-            read_history(&path, 2).unwrap(),
-            counts(&[(16, 3), (16, 0)])
-        );
+        assert_eq!(read_history(&path, 2).unwrap(), counts(&[(16, 3), (16, 0)]));
         let err = format!("{:#}", read_history(&path, 4).unwrap_err());
         assert!(err.contains("iteration 4 is missing"), "{err}");
-        let err = format!("{:#}", read_history(&dir.join("none.jsonl"), 1).unwrap_err());
-        assert!(err.contains("cannot read") && err.contains("none.jsonl"), "{err}");
+        let err = format!(
+            "{:#}",
+            read_history(&dir.join("none.jsonl"), 1).unwrap_err()
+        );
+        assert!(
+            err.contains("cannot read") && err.contains("none.jsonl"),
+            "{err}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -34,6 +34,7 @@ use crate::LearnError;
 use crate::algorithm::{Algorithm, IterationStats};
 use crate::env::VecEnv;
 use crate::export::{PolicyFile, load_acting_weights, policy_files};
+use crate::onnx::{self, ActionBound, ActorGraph};
 use crate::registry::Registration;
 use crate::settings::{Settings, SettingsValue, overlay};
 
@@ -139,6 +140,17 @@ impl Algorithm for Trainer {
             REGISTRATION.table,
             self.config.to_table(),
         )
+    }
+
+    /// The normaliser of the policy's observation and the actor, its mean
+    /// clipped to [-1, 1].
+    fn actor_graph(&self) -> Result<ActorGraph, LearnError> {
+        Ok(ActorGraph::new(
+            &self.normalizer.leading(self.policy.obs_size()),
+            onnx::layers_of(&self.policy.actor, None)?,
+            ActionBound::Clip,
+            onnx::metadata_of(self),
+        ))
     }
 }
 

@@ -40,6 +40,7 @@ use crate::LearnError;
 use crate::algorithm::{Algorithm, IterationStats};
 use crate::env::VecEnv;
 use crate::export::{PolicyFile, load_acting_weights, policy_files};
+use crate::onnx::{self, ActionBound, ActorGraph};
 use crate::registry::Registration;
 use crate::settings::{Settings, SettingsValue, overlay};
 
@@ -179,6 +180,16 @@ impl Algorithm for SacAgent {
             REGISTRATION.table,
             self.config.to_table(),
         )
+    }
+
+    /// The normaliser and the actor's mean head, squashed by tanh.
+    fn actor_graph(&self) -> Result<ActorGraph, LearnError> {
+        Ok(ActorGraph::new(
+            &self.normalizer,
+            onnx::layers_of(&self.actor, Some(self.action_size()))?,
+            ActionBound::Tanh,
+            onnx::metadata_of(self),
+        ))
     }
 }
 

@@ -2,6 +2,7 @@
 //! the physics world that puts the robot on a terrain.
 
 pub mod action;
+pub mod controller;
 pub mod kinematics;
 pub mod mesh;
 pub mod model;

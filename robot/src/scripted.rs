@@ -48,6 +48,7 @@ use nalgebra::{Point3, Vector3};
 
 use crate::LegName;
 use crate::action::{ACTION_SIZE, bound};
+use crate::controller::RobotState;
 use crate::task::{SWING_ORDER, Task};
 
 /// Phases per crawl cycle.
@@ -116,15 +117,27 @@ impl ScriptedCrawl {
 
     /// The crawl's action for the phase about to run on `task`.
     pub fn act(&self, task: &Task) -> [f32; ACTION_SIZE] {
-        let world = task.world();
-        let phase = task.phase();
+        self.act_on(
+            task.phase(),
+            &RobotState::of_world(task.world()),
+            task.squat_feet_in_base_m(),
+        )
+    }
+
+    /// The crawl's action for episode phase `phase` of a robot at `state`
+    /// whose squat puts its feet at `squat` (base frame).
+    pub fn act_on(
+        &self,
+        phase: usize,
+        state: &RobotState,
+        squat: &[Vector3<f64>; 4],
+    ) -> [f32; ACTION_SIZE] {
         let swing = SWING_ORDER[phase % 4];
         let hind = swing.is_hind();
         let lift = lifts_in_phase(phase);
-        let base = world.base_pose();
+        let base = state.base_pose;
         let world_to_base = base.inverse();
-        let feet = world.feet_in_world_m();
-        let squat = task.squat_feet_in_base_m();
+        let feet = state.feet_in_world_m;
         let centroid = |f: &[Vector3<f64>; 4]| f.iter().sum::<Vector3<f64>>() / 4.0;
         let feet_centroid = centroid(&feet);
         let squat_centroid = centroid(squat);
@@ -149,7 +162,7 @@ impl ScriptedCrawl {
             next += 1;
         }
         let spot = self.com_spot_m(SWING_ORDER[next % 4]);
-        let com = world.centre_of_mass_m();
+        let com = state.centre_of_mass_m;
         let shift_world = Vector3::new(
             feet_centroid.x + spot[0] - com.x,
             feet_centroid.y + spot[1] - com.y,
@@ -157,7 +170,7 @@ impl ScriptedCrawl {
         );
         let shift = base.rotation.inverse() * shift_world;
         let (roll, pitch, yaw) = base.rotation.euler_angles();
-        let rise = self.height_gain * (self.base_height_target_m - world.base_height_m());
+        let rise = self.height_gain * (self.base_height_target_m - state.base_height_m());
 
         // Control-point values in SI, as the action's bounds define them.
         let mut si = [0.0f64; ACTION_SIZE];

@@ -120,13 +120,13 @@ pub use observation::{FOOT_HISTORY_PHASES, ObservationConfig};
 pub use reward::RewardTerms;
 pub use termination::Termination;
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::action::{ACTION_SIZE, SAMPLES_PER_PHASE, curves_from_action};
+use crate::action::{ACTION_SIZE, SAMPLES_PER_PHASE};
+use crate::controller::{PhaseController, RobotState};
 use crate::model::LegName;
-use crate::scripted::ScriptedCrawl;
 use crate::snapshot::{NoObserver, PhaseObserver, PhaseStart, StepSnapshot};
 use crate::world::{DT_SECS, World};
 
@@ -165,17 +165,11 @@ pub struct PhaseOutcome {
 
 #[derive(Debug, Clone)]
 struct Episode {
-    phase: usize,
     start_xy_m: [f64; 2],
     goal_xy_m: [f64; 2],
     goals_reached: usize,
     /// the closest the base came to the current goal in this episode, m
     closest_goal_distance_m: f64,
-    /// feet in the base frame at the start of the last three phases, oldest first
-    phase_start_feet: [[Vector3<f64>; 4]; 3],
-    /// feet in the base frame 1 and 2 steps ago
-    feet_1_step_ago: [Vector3<f64>; 4],
-    feet_2_steps_ago: [Vector3<f64>; 4],
     done: bool,
 }
 
@@ -184,7 +178,8 @@ pub struct Task {
     world: World,
     config: TaskConfig,
     rng: ChaCha8Rng,
-    squat_feet_in_base_m: [Vector3<f64>; 4],
+    /// the observation, the phase plan and the joint targets
+    controller: PhaseController,
     episode: Episode,
 }
 
@@ -192,26 +187,17 @@ impl Task {
     /// Wraps a world; `seed` drives the start positions. Call [`Self::reset`]
     /// before the first phase.
     pub fn new(world: World, config: TaskConfig, seed: u64) -> Self {
-        let squat = world.squat_rad().to_vec();
-        let squat_feet_in_base_m = std::array::from_fn(|leg| {
-            let joints = world.model().legs[leg].joints;
-            world.legs()[leg].forward([squat[joints[0]], squat[joints[1]], squat[joints[2]]])
-        });
-        let feet = [Vector3::zeros(); 4];
+        let controller = PhaseController::of_world(&world, config.observation, config.action_prior);
         Self {
             world,
             config,
             rng: ChaCha8Rng::seed_from_u64(seed),
-            squat_feet_in_base_m,
+            controller,
             episode: Episode {
-                phase: 0,
                 start_xy_m: [0.0; 2],
                 goal_xy_m: [0.0; 2],
                 goals_reached: 0,
                 closest_goal_distance_m: 0.0,
-                phase_start_feet: [feet; 3],
-                feet_1_step_ago: feet,
-                feet_2_steps_ago: feet,
                 done: true,
             },
         }
@@ -225,10 +211,13 @@ impl Task {
     /// The action the prior gives for the phase about to run (zeros without
     /// a prior).
     pub fn prior_action(&self) -> [f32; ACTION_SIZE] {
-        match self.config.action_prior {
-            ActionPrior::None => [0.0; ACTION_SIZE],
-            ActionPrior::ScriptedCrawl => ScriptedCrawl::default().act(self),
-        }
+        self.controller
+            .prior_action(&RobotState::of_world(&self.world))
+    }
+
+    /// The controller that plans the phases and writes the observation.
+    pub fn controller(&self) -> &PhaseController {
+        &self.controller
     }
 
     /// The world.
@@ -258,7 +247,7 @@ impl Task {
 
     /// Phases run in this episode.
     pub fn phase(&self) -> usize {
-        self.episode.phase
+        self.controller.phase()
     }
 
     /// Whether the episode has ended (terminated or truncated).
@@ -273,7 +262,7 @@ impl Task {
 
     /// Where each foot is in the squat, base frame (FR, FL, RR, RL), m.
     pub fn squat_feet_in_base_m(&self) -> &[Vector3<f64>; 4] {
-        &self.squat_feet_in_base_m
+        self.controller.squat_feet_in_base_m()
     }
 
     /// Re-seeds the start-position draw (as [`Self::new`]'s `seed` does).
@@ -340,9 +329,9 @@ impl Task {
     fn begin_episode_toward(&mut self, goal_offset_m: [f64; 2], obs: &mut [f32]) {
         let base = self.world.base_pose().translation.vector;
         let start_xy_m = [base.x, base.y];
-        let feet = self.feet_in_base();
+        self.controller
+            .begin_episode(&RobotState::of_world(&self.world));
         self.episode = Episode {
-            phase: 0,
             start_xy_m,
             goal_xy_m: [
                 start_xy_m[0] + goal_offset_m[0],
@@ -350,9 +339,6 @@ impl Task {
             ],
             goals_reached: 0,
             closest_goal_distance_m: 0.0,
-            phase_start_feet: [feet; 3],
-            feet_1_step_ago: feet,
-            feet_2_steps_ago: feet,
             done: false,
         };
         self.episode.closest_goal_distance_m = self.goal_in_base().norm();
@@ -361,7 +347,7 @@ impl Task {
 
     /// The swing leg of the phase about to run.
     pub fn swing_leg(&self) -> LegName {
-        SWING_ORDER[self.episode.phase % 4]
+        self.controller.swing_leg()
     }
 
     /// Runs one phase with `action` (27 values, clipped to [-1, 1]) and
@@ -378,77 +364,31 @@ impl Task {
         obs: &mut [f32],
         observer: &mut dyn PhaseObserver,
     ) -> PhaseOutcome {
-        assert_eq!(
-            action.len(),
-            ACTION_SIZE,
-            "an action has {ACTION_SIZE} values"
-        );
         assert!(!self.episode.done, "reset the task after an episode ends");
-        let composed;
-        let action = match self.config.action_prior {
-            ActionPrior::None => action,
-            ActionPrior::ScriptedCrawl => {
-                let prior = self.prior_action();
-                composed = std::array::from_fn::<f32, ACTION_SIZE, _>(|i| {
-                    (prior[i] + action[i]).clamp(-1.0, 1.0)
-                });
-                &composed[..]
-            }
-        };
-        let swing = self.swing_leg();
-        let base_start = self.world.base_pose();
-        let feet_world_start = self.world.feet_in_world_m();
-        let feet_base_start = self.feet_in_base();
-        let hind = swing.is_hind();
-        let curves = curves_from_action(
-            action,
-            feet_base_start[swing.index()],
-            self.squat_feet_in_base_m[swing.index()],
-            hind,
-        );
+        let plan = self
+            .controller
+            .plan_phase(action, &RobotState::of_world(&self.world));
         let goal_distance_prev = self.goal_in_base().norm();
         observer.phase_started(
             self,
             &PhaseStart {
-                phase: self.episode.phase,
+                phase: plan.phase,
                 sim_time_s: self.world.time_secs(),
-                swing_leg: swing,
-                base_start,
-                curves,
+                swing_leg: plan.swing_leg,
+                base_start: plan.base_start,
+                curves: plan.curves,
             },
         );
 
-        let model_legs = self.world.model().legs.clone();
         let mut targets = self.world.joint_targets_rad().to_vec();
         let (mut torque_norm_sum, mut height_sum, mut ik_clamped, mut steps) =
             (0.0, 0.0, 0usize, 0usize);
         let mut height_range = (f64::INFINITY, f64::NEG_INFINITY);
         let mut termination = None;
         for i in 1..=SAMPLES_PER_PHASE {
-            let t = i as f64 / SAMPLES_PER_PHASE as f64;
-            let rpy = curves.base_orientation.at(t);
-            let offset = Isometry3::from_parts(
-                Translation3::from(curves.base_position.at(t)),
-                UnitQuaternion::from_euler_angles(rpy.x, rpy.y, rpy.z),
-            );
-            let base_target = base_start * offset;
-            let world_from_target_inv = base_target.inverse();
-            for (leg, kin) in model_legs.iter().zip(self.world.legs()) {
-                let foot_world = if leg.name == swing {
-                    base_start * nalgebra::Point3::from(curves.swing_foot.at(t))
-                } else {
-                    nalgebra::Point3::from(feet_world_start[leg.name.index()])
-                };
-                let foot_in_target = world_from_target_inv * foot_world;
-                let solution = kin.inverse(foot_in_target.coords);
-                ik_clamped += solution.clamped as usize;
-                for (k, &j) in leg.joints.iter().enumerate() {
-                    targets[j] = solution.q_rad[k];
-                }
-            }
+            ik_clamped += self.controller.joint_targets(&plan, i, &mut targets);
             self.world.set_joint_targets_rad(&targets);
-            self.episode.feet_2_steps_ago = self.episode.feet_1_step_ago;
-            self.episode.feet_1_step_ago = self.feet_in_base();
+            self.controller.record_step(self.feet_in_base());
             self.world.step();
             steps += 1;
             torque_norm_sum += self
@@ -467,14 +407,7 @@ impl Task {
                 break;
             }
         }
-
-        // Phase bookkeeping: shift the phase-start history.
-        self.episode.phase_start_feet = [
-            self.episode.phase_start_feet[1],
-            self.episode.phase_start_feet[2],
-            feet_base_start,
-        ];
-        self.episode.phase += 1;
+        self.controller.end_phase(&plan);
 
         let mean_base_height_m = height_sum / steps as f64;
         let (reward, terms, goals_reached) = if termination.is_some() {
@@ -522,7 +455,7 @@ impl Task {
             };
             (terms.total(), terms, goals)
         };
-        let truncated = termination.is_none() && self.episode.phase >= self.config.max_phases;
+        let truncated = termination.is_none() && self.phase() >= self.config.max_phases;
         self.episode.done = termination.is_some() || truncated;
         self.observe(obs);
         let outcome = PhaseOutcome {
@@ -547,11 +480,11 @@ impl Task {
     /// The state now, for loggers and viewers; `tiles_half_side_m` sets the
     /// square around the base whose tiles are included (0: none).
     pub fn snapshot(&self, tiles_half_side_m: f64) -> StepSnapshot {
-        // During a phase `episode.phase` is the running phase; between
-        // phases it is the next one.
+        // During a phase `phase()` is the running phase; between phases it
+        // is the next one.
         let mut snapshot = self.world.snapshot(
             tiles_half_side_m,
-            self.episode.phase,
+            self.phase(),
             Some(self.episode.goal_xy_m),
         );
         snapshot.observed_goal_xy_m = self.observed_goal_xy_m();
@@ -615,17 +548,6 @@ impl Task {
         nalgebra::Vector2::new(p.x, p.y)
     }
 
-    /// What the observation's goal blocks show, in the base frame: the
-    /// current goal (the paper's), or with `goal_line_ahead_m = L` the point
-    /// on the goals' line (world y of the goals) L m ahead of the base along
-    /// world +x.
-    fn observed_goal_in_base(&self) -> nalgebra::Vector2<f64> {
-        match self.observed_goal_xy_m() {
-            None => self.goal_in_base(),
-            Some(point_xy_m) => self.in_base(point_xy_m),
-        }
-    }
-
     /// What R_o measures the heading against, in the base frame: the
     /// observed point when the observation shows the goals' line ahead;
     /// otherwise the first goal on the line (the current one, then every
@@ -660,6 +582,7 @@ mod tests {
     use terrain_plugins::{BuildContext, Registry};
 
     use super::*;
+    use crate::scripted::ScriptedCrawl;
     use crate::{RobotModel, WorldConfig};
 
     fn task_on(spec: &str, config: TaskConfig, seed: u64) -> Task {
@@ -791,7 +714,7 @@ mod tests {
             assert!((*h as f64 - 0.57).abs() < 1e-5, "{h}");
         }
         let now = block(&task, &obs, "feet_now");
-        let squat = &task.squat_feet_in_base_m;
+        let squat = task.squat_feet_in_base_m();
         for leg in 0..4 {
             for k in 0..3 {
                 assert!((now[3 * leg + k] as f64 - squat[leg][k]).abs() < 1e-5);

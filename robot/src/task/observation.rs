@@ -1,10 +1,8 @@
 //! The observation: which blocks are on and how the vector is written
 //! (the table is in the module docs of [`super`]).
 
-use nalgebra::Vector3;
-
-use super::{ActionPrior, Task};
-use crate::world::DT_SECS;
+use super::Task;
+use crate::controller::RobotState;
 
 /// The previous phases whose start foot positions the paper observes.
 pub const FOOT_HISTORY_PHASES: usize = 3;
@@ -115,61 +113,14 @@ impl ObservationConfig {
 }
 
 impl Task {
-    /// Writes the observation (see the module docs for the layout).
+    /// Writes the observation (see the module docs for the layout): the
+    /// controller's, for the world's state and the current goal.
     pub fn observe(&self, obs: &mut [f32]) {
-        let size = self.observation_size();
-        assert_eq!(obs.len(), size, "the observation has {size} values");
-        let mut out = Vec::with_capacity(size);
-        let base = self.world.base_pose();
-        let rotation_inv = base.rotation.inverse();
-        out.extend(self.hip_heights_m());
-        out.extend((rotation_inv * -Vector3::z()).iter());
-        let (lin, ang) = self.world.base_velocity();
-        out.extend((rotation_inv * lin).iter());
-        out.extend((rotation_inv * ang).iter());
-        let (_, pitch, _) = base.rotation.euler_angles();
-        out.push(pitch);
-        let now = self.feet_in_base();
-        let c = &self.config.observation;
-        if c.foot_history {
-            let history = &self.episode.phase_start_feet;
-            let shown = c.foot_history_phases.min(history.len());
-            for feet in &history[history.len() - shown..] {
-                out.extend(feet.iter().flat_map(|f| f.iter().copied()));
-            }
-        }
-        out.extend(now.iter().flat_map(|f| f.iter().copied()));
-        if c.short_history {
-            out.extend(
-                self.episode
-                    .feet_1_step_ago
-                    .iter()
-                    .flat_map(|f| f.iter().copied()),
-            );
-            out.extend(
-                self.episode
-                    .feet_2_steps_ago
-                    .iter()
-                    .flat_map(|f| f.iter().copied()),
-            );
-        }
-        if c.foot_velocity {
-            for (p, q) in now.iter().zip(&self.episode.feet_1_step_ago) {
-                out.extend(((p - q) / DT_SECS).iter());
-            }
-        }
-        let goal = self.observed_goal_in_base();
-        out.push(goal.y.atan2(goal.x));
-        out.push(goal.x);
-        out.push(goal.y);
-        out.push((self.episode.phase % 4) as f64 / 4.0);
-        if self.config.action_prior != ActionPrior::None {
-            out.extend(self.prior_action().iter().map(|&a| f64::from(a)));
-        }
-        debug_assert_eq!(out.len(), size);
-        for (o, v) in obs.iter_mut().zip(out) {
-            *o = v as f32;
-        }
+        self.controller.observe(
+            &RobotState::of_world(&self.world),
+            self.episode.goal_xy_m,
+            obs,
+        );
     }
 
     /// Writes the critic's privileged values

@@ -1,0 +1,552 @@
+//! The phase-level controller on its own: what a real robot (or another
+//! simulator) runs around a quadwalk policy, without rapier.
+//!
+//! Given the robot's measured state ([`RobotState`]: base pose and
+//! velocity, foot positions, hip heights), the [`PhaseController`] builds
+//! the policy's observation, turns the policy's 27-D action into the
+//! phase's three Bezier curves ([`PhasePlan`]) and yields, for each of the
+//! phase's 180 control steps (240 Hz), the twelve joint targets the PD
+//! loop tracks (IK of each foot in the target base frame). It keeps the
+//! memory the observation needs (foot positions at the last three phase
+//! starts and 1 and 2 steps ago, the phase counter).
+//!
+//! quadwalk's own [`crate::task::Task`] drives its world through this
+//! controller, so the controller driven by quadwalk's world is `quadwalk
+//! rollout`, bit for bit. A robot's loop:
+//!
+//! ```text
+//! controller.begin_episode(&state);
+//! loop {
+//!     controller.observe(&state, goal_xy_m, &mut obs);
+//!     let plan = controller.plan_phase(&policy(&obs), &state);
+//!     for sample in 1..=SAMPLES_PER_PHASE {
+//!         controller.joint_targets(&plan, sample, &mut targets);
+//!         robot.set_pd_targets(&targets);
+//!         controller.record_step(&state);   // the state before the step
+//!         robot.step();                     // 1/240 s
+//!         state = robot.measure();
+//!     }
+//!     controller.end_phase(&plan);
+//! }
+//! ```
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+
+use crate::action::{ACTION_SIZE, PhaseCurves, SAMPLES_PER_PHASE, curves_from_action};
+use crate::kinematics::LegKinematics;
+use crate::model::{LegName, RobotModel};
+use crate::scripted::ScriptedCrawl;
+use crate::task::{ActionPrior, FOOT_HISTORY_PHASES, ObservationConfig, SWING_ORDER};
+use crate::world::{DT_SECS, World};
+
+/// What the controller reads of the robot: the measured (or estimated)
+/// state, world frame unless named otherwise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RobotState {
+    /// the base's pose (state estimation / odometry)
+    pub base_pose: Isometry3<f64>,
+    /// the base's linear velocity, m/s
+    pub base_linear_velocity_m_per_s: Vector3<f64>,
+    /// the base's angular velocity, rad/s
+    pub base_angular_velocity_rad_per_s: Vector3<f64>,
+    /// the feet (sole-sphere centres), FR FL RR RL, m: from the joint
+    /// angles by forward kinematics on a robot ([`Self::feet_by_kinematics`])
+    pub feet_in_world_m: [Vector3<f64>; 4],
+    /// h_b: each hip (abduction) joint's height above the ground right
+    /// below it, FR FL RR RL, m
+    pub hip_heights_m: [f64; 4],
+    /// the whole robot's centre of mass, m (read by the scripted-crawl
+    /// action prior only)
+    pub centre_of_mass_m: Vector3<f64>,
+}
+
+impl RobotState {
+    /// The state of quadwalk's world, as its task reads it.
+    pub fn of_world(world: &World) -> Self {
+        let (linear, angular) = world.base_velocity();
+        Self {
+            base_pose: world.base_pose(),
+            base_linear_velocity_m_per_s: linear,
+            base_angular_velocity_rad_per_s: angular,
+            feet_in_world_m: world.feet_in_world_m(),
+            hip_heights_m: world.hip_heights_m(),
+            centre_of_mass_m: world.centre_of_mass_m(),
+        }
+    }
+
+    /// The feet in the world from measured joint angles (`q_rad` in the
+    /// model's joint order) by each leg's forward kinematics, for a base at
+    /// `base_pose`.
+    pub fn feet_by_kinematics(
+        legs: &[LegKinematics; 4],
+        leg_joints: &[[usize; 3]; 4],
+        base_pose: &Isometry3<f64>,
+        q_rad: &[f64],
+    ) -> [Vector3<f64>; 4] {
+        std::array::from_fn(|leg| {
+            let [a, h, k] = leg_joints[leg];
+            let in_base = legs[leg].forward([q_rad[a], q_rad[h], q_rad[k]]);
+            (base_pose * Point3::from(in_base)).coords
+        })
+    }
+
+    /// The feet in the base frame.
+    pub fn feet_in_base_m(&self) -> [Vector3<f64>; 4] {
+        let inv = self.base_pose.inverse();
+        self.feet_in_world_m.map(|f| (inv * Point3::from(f)).coords)
+    }
+
+    /// The mean of h_b, m.
+    pub fn base_height_m(&self) -> f64 {
+        self.hip_heights_m.iter().sum::<f64>() / 4.0
+    }
+
+    /// A world point (x, y) in the base frame (x, y; z dropped).
+    pub fn in_base(&self, [x, y]: [f64; 2]) -> nalgebra::Vector2<f64> {
+        let base = self.base_pose;
+        let p = base.inverse() * Point3::new(x, y, base.translation.z);
+        nalgebra::Vector2::new(p.x, p.y)
+    }
+}
+
+/// One phase, planned at its start from the action.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhasePlan {
+    /// the episode's phase index
+    pub phase: usize,
+    /// the leg that swings
+    pub swing_leg: LegName,
+    /// the base pose at the phase start (the curves' frame)
+    pub base_start: Isometry3<f64>,
+    /// the feet in the world at the phase start (the stance feet hold them)
+    pub feet_world_start_m: [Vector3<f64>; 4],
+    /// the feet in the base frame at the phase start
+    pub feet_base_start_m: [Vector3<f64>; 4],
+    /// the base position, base orientation and swing-foot curves
+    pub curves: PhaseCurves,
+}
+
+/// What the observation remembers between control steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Memory {
+    /// the phase about to run (between phases) or running
+    phase: usize,
+    /// feet in the base frame at the start of the last three phases, oldest first
+    phase_start_feet: [[Vector3<f64>; 4]; FOOT_HISTORY_PHASES],
+    /// feet in the base frame 1 and 2 steps ago
+    feet_1_step_ago: [Vector3<f64>; 4],
+    feet_2_steps_ago: [Vector3<f64>; 4],
+}
+
+/// The phase-level controller: observation, phase plan, joint targets.
+#[derive(Debug, Clone)]
+pub struct PhaseController {
+    legs: [LegKinematics; 4],
+    leg_joints: [[usize; 3]; 4],
+    squat_feet_in_base_m: [Vector3<f64>; 4],
+    observation: ObservationConfig,
+    action_prior: ActionPrior,
+    memory: Memory,
+}
+
+impl PhaseController {
+    /// The controller of `model` (its legs' kinematics `legs`, its squat
+    /// `squat_rad` in joint order), observing with `observation` and
+    /// adding `action_prior`'s action to the policy's.
+    pub fn new(
+        model: &RobotModel,
+        legs: [LegKinematics; 4],
+        squat_rad: &[f64],
+        observation: ObservationConfig,
+        action_prior: ActionPrior,
+    ) -> Self {
+        for (kin, leg) in legs.iter().zip(&model.legs) {
+            assert_eq!(
+                kin.name, leg.name,
+                "the kinematics follow the model's leg order"
+            );
+        }
+        let leg_joints = std::array::from_fn(|leg| model.legs[leg].joints);
+        let squat_feet_in_base_m = std::array::from_fn(|leg| {
+            let [a, h, k] = model.legs[leg].joints;
+            legs[leg].forward([squat_rad[a], squat_rad[h], squat_rad[k]])
+        });
+        let feet = [Vector3::zeros(); 4];
+        Self {
+            legs,
+            leg_joints,
+            squat_feet_in_base_m,
+            observation,
+            action_prior,
+            memory: Memory {
+                phase: 0,
+                phase_start_feet: [feet; FOOT_HISTORY_PHASES],
+                feet_1_step_ago: feet,
+                feet_2_steps_ago: feet,
+            },
+        }
+    }
+
+    /// The controller of quadwalk's world's robot.
+    pub fn of_world(
+        world: &World,
+        observation: ObservationConfig,
+        action_prior: ActionPrior,
+    ) -> Self {
+        Self::new(
+            world.model(),
+            world.legs().clone(),
+            world.squat_rad(),
+            observation,
+            action_prior,
+        )
+    }
+
+    /// Observation values.
+    pub fn observation_size(&self) -> usize {
+        self.observation.size()
+            + if self.action_prior == ActionPrior::None {
+                0
+            } else {
+                ACTION_SIZE
+            }
+    }
+
+    /// The phase about to run (between phases) or running.
+    pub fn phase(&self) -> usize {
+        self.memory.phase
+    }
+
+    /// The swing leg of the phase about to run.
+    pub fn swing_leg(&self) -> LegName {
+        SWING_ORDER[self.memory.phase % 4]
+    }
+
+    /// The feet in the base frame in the squat, FR FL RR RL, m.
+    pub fn squat_feet_in_base_m(&self) -> &[Vector3<f64>; 4] {
+        &self.squat_feet_in_base_m
+    }
+
+    /// The legs' kinematics, FR FL RR RL.
+    pub fn legs(&self) -> &[LegKinematics; 4] {
+        &self.legs
+    }
+
+    /// Each leg's joint indices (abduction, hip, knee).
+    pub fn leg_joints(&self) -> &[[usize; 3]; 4] {
+        &self.leg_joints
+    }
+
+    /// Starts an episode from `state`: phase 0, every remembered foot
+    /// position the current one.
+    pub fn begin_episode(&mut self, state: &RobotState) {
+        let feet = state.feet_in_base_m();
+        self.memory = Memory {
+            phase: 0,
+            phase_start_feet: [feet; FOOT_HISTORY_PHASES],
+            feet_1_step_ago: feet,
+            feet_2_steps_ago: feet,
+        };
+    }
+
+    /// The world x, y the observation's goal blocks show for the current
+    /// goal `goal_xy_m`: the goal itself (the paper's), or with
+    /// `goal_line_ahead_m = L` the point on the goals' line L m ahead of
+    /// the base along world +x.
+    pub fn observed_goal_xy_m(&self, state: &RobotState, goal_xy_m: [f64; 2]) -> [f64; 2] {
+        match self.observation.goal_line_ahead_m {
+            None => goal_xy_m,
+            Some(ahead_m) => [state.base_pose.translation.x + ahead_m, goal_xy_m[1]],
+        }
+    }
+
+    /// Writes the policy's observation for `state` heading for
+    /// `goal_xy_m` (the layout is in the docs of [`crate::task`]).
+    pub fn observe(&self, state: &RobotState, goal_xy_m: [f64; 2], obs: &mut [f32]) {
+        let size = self.observation_size();
+        assert_eq!(obs.len(), size, "the observation has {size} values");
+        let mut out = Vec::with_capacity(size);
+        let base = state.base_pose;
+        let rotation_inv = base.rotation.inverse();
+        out.extend(state.hip_heights_m);
+        out.extend((rotation_inv * -Vector3::z()).iter());
+        out.extend((rotation_inv * state.base_linear_velocity_m_per_s).iter());
+        out.extend((rotation_inv * state.base_angular_velocity_rad_per_s).iter());
+        let (_, pitch, _) = base.rotation.euler_angles();
+        out.push(pitch);
+        let now = state.feet_in_base_m();
+        let c = &self.observation;
+        let memory = &self.memory;
+        if c.foot_history {
+            let history = &memory.phase_start_feet;
+            let shown = c.foot_history_phases.min(history.len());
+            for feet in &history[history.len() - shown..] {
+                out.extend(feet.iter().flat_map(|f| f.iter().copied()));
+            }
+        }
+        out.extend(now.iter().flat_map(|f| f.iter().copied()));
+        if c.short_history {
+            out.extend(
+                memory
+                    .feet_1_step_ago
+                    .iter()
+                    .flat_map(|f| f.iter().copied()),
+            );
+            out.extend(
+                memory
+                    .feet_2_steps_ago
+                    .iter()
+                    .flat_map(|f| f.iter().copied()),
+            );
+        }
+        if c.foot_velocity {
+            for (p, q) in now.iter().zip(&memory.feet_1_step_ago) {
+                out.extend(((p - q) / DT_SECS).iter());
+            }
+        }
+        let goal = state.in_base(self.observed_goal_xy_m(state, goal_xy_m));
+        out.push(goal.y.atan2(goal.x));
+        out.push(goal.x);
+        out.push(goal.y);
+        out.push((memory.phase % 4) as f64 / 4.0);
+        if self.action_prior != ActionPrior::None {
+            out.extend(self.prior_action(state).iter().map(|&a| f64::from(a)));
+        }
+        debug_assert_eq!(out.len(), size);
+        for (o, v) in obs.iter_mut().zip(out) {
+            *o = v as f32;
+        }
+    }
+
+    /// The action the prior gives for the phase about to run (zeros
+    /// without a prior).
+    pub fn prior_action(&self, state: &RobotState) -> [f32; ACTION_SIZE] {
+        match self.action_prior {
+            ActionPrior::None => [0.0; ACTION_SIZE],
+            ActionPrior::ScriptedCrawl => ScriptedCrawl::default().act_on(
+                self.memory.phase,
+                state,
+                &self.squat_feet_in_base_m,
+            ),
+        }
+    }
+
+    /// The phase about to run, planned from the policy's `action` (27
+    /// values; clipped to [-1, 1], on top of the prior's where there is
+    /// one) at `state`.
+    pub fn plan_phase(&self, action: &[f32], state: &RobotState) -> PhasePlan {
+        assert_eq!(
+            action.len(),
+            ACTION_SIZE,
+            "an action has {ACTION_SIZE} values"
+        );
+        let composed;
+        let action = match self.action_prior {
+            ActionPrior::None => action,
+            ActionPrior::ScriptedCrawl => {
+                let prior = self.prior_action(state);
+                composed = std::array::from_fn::<f32, ACTION_SIZE, _>(|i| {
+                    (prior[i] + action[i]).clamp(-1.0, 1.0)
+                });
+                &composed[..]
+            }
+        };
+        let swing = self.swing_leg();
+        let feet_base_start_m = state.feet_in_base_m();
+        let curves = curves_from_action(
+            action,
+            feet_base_start_m[swing.index()],
+            self.squat_feet_in_base_m[swing.index()],
+            swing.is_hind(),
+        );
+        PhasePlan {
+            phase: self.memory.phase,
+            swing_leg: swing,
+            base_start: state.base_pose,
+            feet_world_start_m: state.feet_in_world_m,
+            feet_base_start_m,
+            curves,
+        }
+    }
+
+    /// Writes the joint targets of control step `sample` (1 to
+    /// [`SAMPLES_PER_PHASE`], at t = sample / 180) of `plan` into
+    /// `targets_rad` (the legs' joints, in the model's joint order); returns
+    /// how many legs' IK was clamped (out of reach or past a limit).
+    ///
+    /// `base_target = base_start * (translate(B_pos(t)) * rotate(B_rpy(t)))`;
+    /// the swing foot follows B_foot(t) in the phase-start base frame, the
+    /// stance feet hold their phase-start world positions, each solved by IK
+    /// in the target base frame.
+    pub fn joint_targets(&self, plan: &PhasePlan, sample: usize, targets_rad: &mut [f64]) -> usize {
+        let t = sample as f64 / SAMPLES_PER_PHASE as f64;
+        let curves = &plan.curves;
+        let rpy = curves.base_orientation.at(t);
+        let offset = Isometry3::from_parts(
+            Translation3::from(curves.base_position.at(t)),
+            UnitQuaternion::from_euler_angles(rpy.x, rpy.y, rpy.z),
+        );
+        let base_target = plan.base_start * offset;
+        let world_from_target_inv = base_target.inverse();
+        let mut clamped = 0;
+        for (kin, joints) in self.legs.iter().zip(&self.leg_joints) {
+            let foot_world = if kin.name == plan.swing_leg {
+                plan.base_start * Point3::from(curves.swing_foot.at(t))
+            } else {
+                Point3::from(plan.feet_world_start_m[kin.name.index()])
+            };
+            let foot_in_target = world_from_target_inv * foot_world;
+            let solution = kin.inverse(foot_in_target.coords);
+            clamped += solution.clamped as usize;
+            for (k, &j) in joints.iter().enumerate() {
+                targets_rad[j] = solution.q_rad[k];
+            }
+        }
+        clamped
+    }
+
+    /// Remembers the feet of `state`, the state before a control step is
+    /// taken (the observation's short history).
+    pub fn record_step(&mut self, state_feet_in_base_m: [Vector3<f64>; 4]) {
+        self.memory.feet_2_steps_ago = self.memory.feet_1_step_ago;
+        self.memory.feet_1_step_ago = state_feet_in_base_m;
+    }
+
+    /// Ends `plan`'s phase: its start joins the phase-start history and
+    /// the next phase is the one about to run.
+    pub fn end_phase(&mut self, plan: &PhasePlan) {
+        let history = &mut self.memory.phase_start_feet;
+        history.rotate_left(1);
+        history[FOOT_HISTORY_PHASES - 1] = plan.feet_base_start_m;
+        self.memory.phase += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use terrain_plugins::{BuildContext, Registry};
+
+    use super::*;
+    use crate::WorldConfig;
+    use crate::task::{Task, TaskConfig};
+
+    fn world_on(spec: &str) -> World {
+        let model = Arc::new(RobotModel::laikago());
+        let ctx = BuildContext {
+            supported_mass_kg: model.total_mass_kg(),
+            seed: 3,
+            ..BuildContext::default()
+        };
+        let terrain = Registry::builtin().create(spec, &ctx).unwrap();
+        World::new(model, terrain, WorldConfig::default(), [0.0, 0.0]).unwrap()
+    }
+
+    /// A robot's loop (the module docs' loop, on a second world standing in
+    /// for the robot) gives the task's observations, joint targets and
+    /// motion bit for bit, for the goal the task heads for.
+    #[test]
+    fn the_controller_on_its_own_drives_a_world_as_the_task_does() {
+        let config = TaskConfig {
+            observation: ObservationConfig {
+                goal_line_ahead_m: Some(1.0),
+                ..ObservationConfig::default()
+            },
+            ..TaskConfig::default()
+        };
+        let start = [1.3, -0.4];
+        let mut task = Task::new(world_on("elastic:5cm"), config.clone(), 0);
+        let mut task_obs = vec![0.0; task.observation_size()];
+        task.reset_at(start, &mut task_obs);
+
+        let mut robot = world_on("elastic:5cm");
+        robot.reset_terrain();
+        robot.reset_robot(start, 0.0);
+        for _ in 0..(config.settle_secs / DT_SECS).round() as usize {
+            robot.step();
+        }
+        let mut controller =
+            PhaseController::of_world(&robot, config.observation, config.action_prior);
+        controller.begin_episode(&RobotState::of_world(&robot));
+        let mut obs = vec![0.0; controller.observation_size()];
+        let mut targets = robot.joint_targets_rad().to_vec();
+        let crawl = ScriptedCrawl::default();
+        for phase in 0..16 {
+            let state = RobotState::of_world(&robot);
+            controller.observe(&state, task.goal_xy_m(), &mut obs);
+            assert_eq!(obs, task_obs, "phase {phase}'s observation");
+            let action = crawl.act_on(
+                controller.phase(),
+                &state,
+                controller.squat_feet_in_base_m(),
+            );
+            assert_eq!(action, crawl.act(&task), "phase {phase}'s action");
+            let plan = controller.plan_phase(&action, &state);
+            for sample in 1..=SAMPLES_PER_PHASE {
+                controller.joint_targets(&plan, sample, &mut targets);
+                robot.set_joint_targets_rad(&targets);
+                controller.record_step(RobotState::of_world(&robot).feet_in_base_m());
+                robot.step();
+            }
+            controller.end_phase(&plan);
+            let outcome = task.step_phase(&action, &mut task_obs);
+            assert!(outcome.termination.is_none(), "phase {phase}: {outcome:?}");
+            assert_eq!(robot.joint_targets_rad(), task.world().joint_targets_rad());
+            assert_eq!(
+                robot.base_pose(),
+                task.world().base_pose(),
+                "after phase {phase}"
+            );
+        }
+        assert_eq!(controller.phase(), task.phase());
+        let moved = robot.base_pose().translation.x - start[0];
+        assert!(moved > 0.02, "the crawl walks: {moved} m");
+    }
+
+    /// On a robot the feet come from the joint encoders: forward
+    /// kinematics of rapier's joint angles puts them where rapier's bodies
+    /// are, within float rounding of rapier's single-precision poses.
+    #[test]
+    fn feet_by_kinematics_match_the_simulated_feet() {
+        let mut world = world_on("elastic:5cm");
+        world.reset_robot([0.0, 0.0], 0.3);
+        for _ in 0..120 {
+            world.step();
+        }
+        let controller =
+            PhaseController::of_world(&world, ObservationConfig::default(), ActionPrior::None);
+        let feet = RobotState::feet_by_kinematics(
+            controller.legs(),
+            controller.leg_joints(),
+            &world.base_pose(),
+            &world.joint_positions_rad(),
+        );
+        for (fk, sim) in feet.iter().zip(world.feet_in_world_m()) {
+            assert!((fk - sim).norm() < 1e-5, "{fk} against {sim}");
+        }
+    }
+
+    #[test]
+    fn the_phase_start_history_keeps_the_three_newest_oldest_first() {
+        let world = world_on("rigid");
+        let mut controller =
+            PhaseController::of_world(&world, ObservationConfig::default(), ActionPrior::None);
+        let state = RobotState::of_world(&world);
+        controller.begin_episode(&state);
+        let mut plan = controller.plan_phase(&[0.0; ACTION_SIZE], &state);
+        for k in 1..=4 {
+            plan.feet_base_start_m = [Vector3::repeat(k as f64); 4];
+            controller.end_phase(&plan);
+        }
+        let firsts: Vec<f64> = controller
+            .memory
+            .phase_start_feet
+            .iter()
+            .map(|f| f[0].x)
+            .collect();
+        assert_eq!(firsts, [2.0, 3.0, 4.0]);
+        assert_eq!(controller.phase(), 4);
+        assert_eq!(controller.swing_leg(), SWING_ORDER[0]);
+    }
+}

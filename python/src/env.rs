@@ -198,6 +198,13 @@ impl Env {
         [p.x, p.y, p.z]
     }
 
+    /// The current goal's world x, y (what a navigation layer gives a
+    /// robot's controller), m.
+    #[getter]
+    fn goal_xy_m(&mut self) -> [f64; 2] {
+        self.task_mut().goal_xy_m()
+    }
+
     /// Where the episode started (x, y), m.
     #[getter]
     fn start_xy_m(&mut self) -> [f64; 2] {

@@ -9,6 +9,9 @@
 //!   Gymnasium's next-step autoreset;
 //! - [`policy::Policy`]: a quadwalk checkpoint's mean action on numpy
 //!   observations;
+//! - [`controller::Controller`] and [`controller::Sim`]: the phase-level
+//!   controller a robot runs around a policy, and quadwalk's world as a
+//!   bare robot it drives step by step;
 //! - [`scene::terrains`]: the terrain registry (name, summary, parameters).
 //!
 //! Scenes are built exactly as `quadwalk rollout` builds them
@@ -20,6 +23,7 @@
 
 use pyo3::prelude::*;
 
+mod controller;
 mod env;
 mod policy;
 mod scene;
@@ -30,6 +34,8 @@ fn _quadwalk(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<env::Env>()?;
     m.add_class::<env::VecEnv>()?;
     m.add_class::<policy::Policy>()?;
+    m.add_class::<controller::Controller>()?;
+    m.add_class::<controller::Sim>()?;
     m.add_function(wrap_pyfunction!(scene::terrains, m)?)?;
     m.add("ACTION_SIZE", robot::action::ACTION_SIZE)?;
     m.add("PHASE_SECS", robot::action::PHASE_SECS)?;

@@ -37,7 +37,7 @@ use crate::kinematics::LegKinematics;
 use crate::model::{LegName, RobotModel};
 use crate::scripted::ScriptedCrawl;
 use crate::task::{ActionPrior, FOOT_HISTORY_PHASES, ObservationConfig, SWING_ORDER};
-use crate::world::{DT_SECS, World};
+use crate::world::{DT_SECS, World, WorldError, squat_rad_of};
 
 /// What the controller reads of the robot: the measured (or estimated)
 /// state, world frame unless named otherwise.
@@ -185,6 +185,24 @@ impl PhaseController {
                 feet_2_steps_ago: feet,
             },
         }
+    }
+
+    /// The controller of `model` without a world: its legs' kinematics and
+    /// squat as quadwalk's world derives them.
+    pub fn for_model(
+        model: &RobotModel,
+        observation: ObservationConfig,
+        action_prior: ActionPrior,
+    ) -> Result<Self, WorldError> {
+        let legs = LegKinematics::from_model(model)?;
+        let squat_rad = squat_rad_of(model, &legs)?;
+        Ok(Self::new(
+            model,
+            legs,
+            &squat_rad,
+            observation,
+            action_prior,
+        ))
     }
 
     /// The controller of quadwalk's world's robot.

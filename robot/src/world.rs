@@ -127,22 +127,8 @@ impl World {
         terrain.build(&mut physics);
 
         let robot = insert_robot(&mut physics, &model, &config)?;
+        let squat_rad = squat_rad_of(&model, &legs)?;
         let n = model.joints.len();
-        let mut squat_rad = vec![0.0; n];
-        for (leg, kin) in model.legs.iter().zip(&legs) {
-            let target = Vector3::new(
-                kin.abduction_m.x,
-                SQUAT_FOOT_WIDTH_M * leg.name.side_sign(),
-                -SQUAT_FOOT_DEPTH_M,
-            );
-            let sol = kin.inverse(target);
-            if sol.clamped {
-                return Err(WorldError::SquatUnreachable(leg.name.short()));
-            }
-            for (k, &j) in leg.joints.iter().enumerate() {
-                squat_rad[j] = sol.q_rad[k];
-            }
-        }
         let mut world = Self {
             physics,
             terrain,
@@ -612,6 +598,28 @@ fn multibody_mut(physics: &mut PhysicsWorld, index: MultibodyIndex) -> &mut Mult
         .multibody_joints
         .get_multibody_mut(index)
         .expect("the robot's multibody exists")
+}
+
+/// The joint angles of the squat every episode starts from, in the
+/// model's joint order: each foot `SQUAT_FOOT_DEPTH_M` below its abduction
+/// joint and `SQUAT_FOOT_WIDTH_M` to its side, by IK.
+pub fn squat_rad_of(model: &RobotModel, legs: &[LegKinematics; 4]) -> Result<Vec<f64>, WorldError> {
+    let mut squat_rad = vec![0.0; model.joints.len()];
+    for (leg, kin) in model.legs.iter().zip(legs) {
+        let target = Vector3::new(
+            kin.abduction_m.x,
+            SQUAT_FOOT_WIDTH_M * leg.name.side_sign(),
+            -SQUAT_FOOT_DEPTH_M,
+        );
+        let sol = kin.inverse(target);
+        if sol.clamped {
+            return Err(WorldError::SquatUnreachable(leg.name.short()));
+        }
+        for (k, &j) in leg.joints.iter().enumerate() {
+            squat_rad[j] = sol.q_rad[k];
+        }
+    }
+    Ok(squat_rad)
 }
 
 fn insert_robot(

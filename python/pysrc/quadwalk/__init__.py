@@ -13,7 +13,11 @@ wraps them in Gymnasium's interfaces:
   ``config=``) for ``gymnasium.make``;
 - ``terrains()``: the terrain plugins and their parameters;
 - ``Policy.load(dir)``: a quadwalk checkpoint's mean action on numpy
-  observations.
+  observations;
+- ``Controller.for_policy(dir)``: the phase-level controller a robot runs
+  around a policy (its observation from the measured state, the phase plan,
+  the joint targets of each 240 Hz control step), and ``Sim``: quadwalk's
+  world as a bare robot it drives step by step.
 
 A bad terrain spec, experiment file or action raises ``ValueError`` with a
 message that names it.
@@ -28,7 +32,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
 
-from ._quadwalk import ACTION_SIZE, PHASE_SECS, REWARD_TERMS, Policy, terrains
+from ._quadwalk import ACTION_SIZE, PHASE_SECS, REWARD_TERMS, Controller, Policy, Sim, terrains
 from ._quadwalk import Env as _NativeEnv
 from ._quadwalk import VecEnv as _NativeVecEnv
 
@@ -36,9 +40,11 @@ __all__ = [
     "ACTION_SIZE",
     "PHASE_SECS",
     "REWARD_TERMS",
+    "Controller",
     "Policy",
     "QuadwalkEnv",
     "QuadwalkVectorEnv",
+    "Sim",
     "make_env",
     "make_vec_env",
     "terrains",
@@ -101,6 +107,11 @@ class QuadwalkEnv(gym.Env):
     def start_xy_m(self) -> tuple[float, float]:
         """Where the episode started (x, y), world frame, metres."""
         return tuple(self._env.start_xy_m)
+
+    @property
+    def goal_xy_m(self) -> tuple[float, float]:
+        """The current goal (x, y), world frame, metres."""
+        return tuple(self._env.goal_xy_m)
 
 
 def _autoreset_metadata(same_step: bool = False) -> dict[str, Any]:

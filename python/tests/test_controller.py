@@ -1,0 +1,84 @@
+"""The phase-level controller from Python (`quadwalk.Controller`) driving
+quadwalk's world as a bare robot (`quadwalk.Sim`) step by step, with the
+shipped policy's ONNX graph in onnxruntime as the policy: the deployment
+loop. It reproduces the environment's episode (the episode `quadwalk
+rollout --seed` runs) bit for bit, given the same actions."""
+
+import numpy as np
+import pytest
+
+import quadwalk
+
+ort = pytest.importorskip("onnxruntime", reason="the controller test runs the ONNX policy (pytest_suite.rs installs onnxruntime)")
+
+
+def test_the_controller_on_a_bare_robot_reproduces_the_environment(root):
+    policy_dir = root / "policies" / "elastic-5cm"
+    config = str(policy_dir / "config.toml")
+    seed, phases = 1_000_007, 12
+    env = quadwalk.make_env(config=config, seed=seed)
+    env_obs, _ = env.reset(seed=seed)
+
+    robot = quadwalk.Sim(config=config, seed=seed)
+    robot.reset()
+    controller = quadwalk.Controller.for_policy(str(policy_dir))
+    assert controller.observation_size == 102
+    controller.begin_episode(robot.state())
+    session = ort.InferenceSession(str(policy_dir / "policy.onnx"), providers=["CPUExecutionProvider"])
+
+    for phase in range(phases):
+        state = robot.state()
+        obs = controller.observe(state, list(env.goal_xy_m))
+        np.testing.assert_array_equal(obs, env_obs, err_msg=f"phase {phase}")
+        action = session.run(["action"], {"observation": obs[None, :]})[0][0]
+        controller.plan_phase(action, state)
+        for sample in range(1, quadwalk.Controller.samples_per_phase + 1):
+            targets = controller.joint_targets(sample)
+            controller.record_step(state)
+            robot.step(targets)
+            state = robot.state()
+        controller.end_phase()
+        env_obs, _, terminated, truncated, _ = env.step(action)
+        assert not (terminated or truncated)
+        assert tuple(robot.state()["base_position_m"]) == env.base_position_m
+    assert controller.phase == phases
+    assert env.base_position_m[0] - env.start_xy_m[0] > 0.1, "the policy walks"
+
+
+def test_feet_from_joint_angles_give_the_observation_within_rounding(root):
+    """A robot measures joint angles, not feet: forward kinematics puts the
+    feet where rapier's single-precision bodies are, to ~1e-6 m."""
+    policy_dir = root / "policies" / "elastic-5cm"
+    robot = quadwalk.Sim(config=str(policy_dir / "config.toml"), seed=3)
+    robot.reset()
+    state = robot.state()
+    by_kinematics = {k: v for k, v in state.items() if k != "feet_in_world_m"}
+    simulated, measured = (quadwalk.Controller.for_policy(str(policy_dir)) for _ in range(2))
+    simulated.begin_episode(state)
+    measured.begin_episode(by_kinematics)
+    a = simulated.observe(state, [2.0, 0.0])
+    b = measured.observe(by_kinematics, [2.0, 0.0])
+    np.testing.assert_allclose(a, b, atol=1e-4, rtol=0)
+
+
+def test_bad_states_and_calls_are_named():
+    controller = quadwalk.Controller()
+    robot = quadwalk.Sim(terrain="rigid")
+    robot.reset()
+    state = robot.state()
+    with pytest.raises(ValueError, match="base_orientation_xyzw"):
+        controller.observe({**state, "base_orientation_xyzw": [0, 0, 0, 2]}, [2.0, 0.0])
+    with pytest.raises(ValueError, match="hip_heights_m.*takes 4"):
+        controller.observe({**state, "hip_heights_m": [0.3] * 3}, [2.0, 0.0])
+    bare = {k: v for k, v in state.items() if k not in ("feet_in_world_m", "joint_angles_rad")}
+    with pytest.raises(ValueError, match="feet_in_world_m.*joint_angles_rad"):
+        controller.observe(bare, [2.0, 0.0])
+    with pytest.raises(ValueError, match="plan_phase first"):
+        controller.joint_targets(1)
+    controller.plan_phase(np.zeros(27, np.float32), state)
+    with pytest.raises(ValueError, match="samples 1 to 180"):
+        controller.joint_targets(181)
+    with pytest.raises(ValueError, match="26 values"):
+        controller.plan_phase(np.zeros(26, np.float32), state)
+    with pytest.raises(ValueError, match="12 joints"):
+        robot.step(np.zeros(11))

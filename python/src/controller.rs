@@ -192,6 +192,33 @@ impl Controller {
         self.inner.swing_leg().short()
     }
 
+    /// The squat an episode starts from: the 12 joint angles, rad.
+    #[getter]
+    fn squat_joint_angles_rad(&self) -> Vec<f64> {
+        self.inner.squat_rad().to_vec()
+    }
+
+    /// The feet in the base frame in the squat, FR FL RR RL, m (4 x 3).
+    #[getter]
+    fn squat_feet_in_base_m(&self) -> Vec<[f64; 3]> {
+        self.inner
+            .squat_feet_in_base_m()
+            .iter()
+            .map(|f| [f.x, f.y, f.z])
+            .collect()
+    }
+
+    /// Each leg's hip (abduction) joint in the base frame, FR FL RR RL, m
+    /// (4 x 3): where a robot measures h_b from.
+    #[getter]
+    fn hips_in_base_m(&self) -> Vec<[f64; 3]> {
+        self.inner
+            .legs()
+            .iter()
+            .map(|l| [l.abduction_m.x, l.abduction_m.y, l.abduction_m.z])
+            .collect()
+    }
+
     /// Control steps per phase (the PD loop's 240 Hz over 0.75 s).
     #[classattr]
     fn samples_per_phase() -> usize {

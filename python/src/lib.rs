@@ -38,6 +38,7 @@ fn _quadwalk(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<controller::Sim>()?;
     m.add_function(wrap_pyfunction!(scene::terrains, m)?)?;
     m.add("ACTION_SIZE", robot::action::ACTION_SIZE)?;
+    m.add("LAIKAGO_URDF", robot::LAIKAGO_URDF)?;
     m.add("PHASE_SECS", robot::action::PHASE_SECS)?;
     m.add("REWARD_TERMS", robot::task::RewardTerms::NAMES.to_vec())?;
     Ok(())

@@ -143,6 +143,7 @@ struct Memory {
 pub struct PhaseController {
     legs: [LegKinematics; 4],
     leg_joints: [[usize; 3]; 4],
+    squat_rad: Vec<f64>,
     squat_feet_in_base_m: [Vector3<f64>; 4],
     observation: ObservationConfig,
     action_prior: ActionPrior,
@@ -175,6 +176,7 @@ impl PhaseController {
         Self {
             legs,
             leg_joints,
+            squat_rad: squat_rad.to_vec(),
             squat_feet_in_base_m,
             observation,
             action_prior,
@@ -238,6 +240,12 @@ impl PhaseController {
     /// The swing leg of the phase about to run.
     pub fn swing_leg(&self) -> LegName {
         SWING_ORDER[self.memory.phase % 4]
+    }
+
+    /// The squat every episode starts from, joint angles in the model's
+    /// order, rad.
+    pub fn squat_rad(&self) -> &[f64] {
+        &self.squat_rad
     }
 
     /// The feet in the base frame in the squat, FR FL RR RL, m.

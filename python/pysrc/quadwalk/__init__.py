@@ -32,12 +32,13 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
 
-from ._quadwalk import ACTION_SIZE, PHASE_SECS, REWARD_TERMS, Controller, Policy, Sim, terrains
+from ._quadwalk import ACTION_SIZE, LAIKAGO_URDF, PHASE_SECS, REWARD_TERMS, Controller, Policy, Sim, terrains
 from ._quadwalk import Env as _NativeEnv
 from ._quadwalk import VecEnv as _NativeVecEnv
 
 __all__ = [
     "ACTION_SIZE",
+    "LAIKAGO_URDF",
     "PHASE_SECS",
     "REWARD_TERMS",
     "Controller",

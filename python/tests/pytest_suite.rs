@@ -9,7 +9,7 @@
 //! `_quadwalk.abi3.so`), makes a virtual environment there once
 //! (`target/pyenv`), installs what the tests import (numpy, gymnasium,
 //! pytest, for the trainer tests torch, Stable-Baselines3 and Ray RLlib, and
-//! for the ONNX tests onnx and onnxruntime;
+//! for the ONNX and second-engine tests onnx, onnxruntime and mujoco;
 //! pip needs PyPI the first time) and runs pytest against the `quadwalk`
 //! binary built by the same `cargo test --workspace`.
 //!
@@ -20,9 +20,9 @@ use std::process::Command;
 
 /// What the tests import besides the package: its own dependencies, the
 /// trainers and ONNX (`pyproject.toml`'s `test`, `sb3`, `rllib` and `onnx`
-/// extras).
+/// extras, and `mujoco` for the second engine).
 /// RLlib 2.5x pins gymnasium 1.2.x; the package accepts 1.0 to 1.4.
-const TEST_REQUIREMENTS: [&str; 8] = [
+const TEST_REQUIREMENTS: [&str; 9] = [
     "numpy>=1.23",
     "gymnasium>=1.0,<1.3",
     "pytest>=7",
@@ -31,6 +31,7 @@ const TEST_REQUIREMENTS: [&str; 8] = [
     "torch>=2.3,<3",
     "onnx>=1.15,<2",
     "onnxruntime>=1.17,<2",
+    "mujoco>=3.2,<4",
 ];
 
 /// The directory that holds this test's executable, `target/<profile>/deps`,

@@ -101,6 +101,7 @@ class MujocoRobot:
             xs = np.arange(-back_m + tile_pitch_m / 2, length_m, tile_pitch_m)
             ys = np.arange(-width_m / 2 + tile_pitch_m / 2, width_m / 2, tile_pitch_m)
             self.tile_centres = np.array([(x, y) for x in xs for y in ys])
+            self._grid = (xs[0], ys[0], tile_pitch_m, len(xs), len(ys))
             for i, (x, y) in enumerate(self.tile_centres):
                 b = wb.add_body(name=f"tile{i}", pos=[x, y, -0.05])
                 b.add_joint(name=f"tile{i}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1],
@@ -129,8 +130,10 @@ class MujocoRobot:
         nearest tile (negative where it sank)."""
         if self.sink_m is None:
             return 0.0
-        i = int(np.argmin(((self.tile_centres - (x, y)) ** 2).sum(1)))
-        return float(self.d.qpos[self._tile_qadr[i]])
+        x0, y0, pitch, nx, ny = self._grid
+        ix = min(max(round((x - x0) / pitch), 0), nx - 1)
+        iy = min(max(round((y - y0) / pitch), 0), ny - 1)
+        return float(self.d.qpos[self._tile_qadr[ix * ny + iy]])
 
     def foot_sinks_m(self) -> list[float]:
         """How far the tile under each toe sank (0 on the plane), m."""

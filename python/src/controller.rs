@@ -69,7 +69,8 @@ fn robot_state(
     let q = values(state, "base_orientation_xyzw", 4)?;
     let quaternion = Quaternion::new(q[3], q[0], q[1], q[2]);
     let norm = quaternion.norm();
-    if !((norm - 1.0).abs() < 1e-6) {
+    let unit = (norm - 1.0).abs() < 1e-6;
+    if !unit {
         return Err(PyValueError::new_err(format!(
             "state[\"base_orientation_xyzw\"]: not a unit quaternion (norm {norm})"
         )));

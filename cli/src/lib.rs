@@ -35,6 +35,7 @@ macro_rules! out {
 
 mod bench;
 mod commands;
+mod curves;
 mod eval;
 mod export;
 mod onnx;
@@ -179,6 +180,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Regenerate the results pages (Table I, Fig. 4, the policy-by-terrain matrix, the ablations) from a plan of evaluations.
     Results(results::ResultsArgs),
+    /// Draw training runs' learning curves side by side, by phases and by wall time, in one PNG.
+    Curves(curves::CurvesArgs),
     /// Write a trained policy for use or shipping: actor, normaliser, config and metrics, without optimiser state.
     Export(export::ExportArgs),
     /// Write a trained policy's deterministic actor (normaliser, network, action bound) as one ONNX graph.
@@ -232,6 +235,7 @@ fn run_command(
         Command::Train(args) => train::train(registry, &args, second_interrupt),
         Command::Bench(args) => done(bench::run(registry, &args)),
         Command::Results(args) => done(results::results(registry, &args)),
+        Command::Curves(args) => done(curves::curves(&args)),
         Command::Export(args) => done(export::export(registry, &args)),
         Command::Onnx(args) => done(onnx::onnx(registry, &args)),
     }

@@ -325,31 +325,60 @@ pub struct Curve {
 
 /// Lines over a shared x axis (learning curves), one legend entry each.
 pub fn curves(path: &Path, title: &str, x_desc: &str, y_desc: &str, lines: &[Curve]) -> Result<()> {
+    panels(
+        path,
+        &[Panel {
+            title,
+            x_desc,
+            y_desc,
+            lines,
+        }],
+    )
+}
+
+/// One chart of [`panels`].
+pub struct Panel<'a> {
+    /// its caption
+    pub title: &'a str,
+    /// the x axis' label
+    pub x_desc: &'a str,
+    /// the y axis' label
+    pub y_desc: &'a str,
+    /// its lines
+    pub lines: &'a [Curve],
+}
+
+/// Charts of lines side by side in one figure.
+pub fn panels(path: &Path, panels: &[Panel]) -> Result<()> {
     render(path, |root| {
-        let all = || lines.iter().flat_map(|c| c.points.iter());
-        let (x0, x1) = padded_range(all().map(|p| p.0));
-        let (y0, y1) = padded_range(all().map(|p| p.1));
-        let mut chart = new_chart(root, title, x0..x1, y0..y1)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .label_style((FONT, 15))
-            .draw()
-            .map_err(plot_error)?;
-        for line in lines {
-            let colour = COLOURS[line.colour_index % COLOURS.len()];
+        let areas = root.split_evenly((1, panels.len().max(1)));
+        for (area, panel) in areas.iter().zip(panels) {
+            let all = || panel.lines.iter().flat_map(|c| c.points.iter());
+            let (x0, x1) = padded_range(all().map(|p| p.0));
+            let (y0, y1) = padded_range(all().map(|p| p.1));
+            let mut chart = new_chart(area, panel.title, x0..x1, y0..y1)?;
             chart
-                .draw_series(LineSeries::new(
-                    line.points.iter().copied(),
-                    colour.stroke_width(2),
-                ))
-                .map_err(plot_error)?
-                .label(line.label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-                });
+                .configure_mesh()
+                .x_desc(panel.x_desc)
+                .y_desc(panel.y_desc)
+                .label_style((FONT, 15))
+                .draw()
+                .map_err(plot_error)?;
+            for line in panel.lines {
+                let colour = COLOURS[line.colour_index % COLOURS.len()];
+                chart
+                    .draw_series(LineSeries::new(
+                        line.points.iter().copied(),
+                        colour.stroke_width(2),
+                    ))
+                    .map_err(plot_error)?
+                    .label(line.label.clone())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                    });
+            }
+            draw_legend(&mut chart)?;
         }
-        draw_legend(&mut chart)
+        Ok(())
     })
 }

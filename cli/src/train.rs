@@ -11,6 +11,7 @@ use std::sync::{Arc, OnceLock};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use experiment::Experiment;
+use experiment::config::advance::Advance;
 use experiment::train::run_dir::default_run_dir;
 use experiment::train::{IterationReport, RunPlan, RunStart, TrainObserver, TrainOutcome};
 use learn::registry::Registration;
@@ -124,10 +125,11 @@ impl TrainObserver for Terminal {
         eprintln!("curriculum stage {}: {terrain}{rate}{task}", stage + 1);
     }
 
-    fn stage_ready(&mut self, stage: usize, iterations: u64, survival: f64) {
+    fn stage_ready(&mut self, stage: usize, iterations: u64, rule: &Advance) {
         eprintln!(
-            "curriculum stage {} ready after {iterations} iterations (the last window's episodes survived at {survival} or more)",
-            stage + 1
+            "curriculum stage {} ready after {iterations} iterations ({} reached)",
+            stage + 1,
+            rule.describe()
         );
     }
 

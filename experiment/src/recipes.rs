@@ -49,10 +49,10 @@ impl Recipe {
     /// stages on one terrain counted together).
     pub fn describe(&self, experiment: &Experiment) -> String {
         // consecutive fixed stages on one terrain read as one
-        let mut runs: Vec<(String, u64, Option<f64>)> = Vec::new();
+        let mut runs: Vec<(String, u64, Option<String>)> = Vec::new();
         for stage in &experiment.curriculum {
             let terrain = stage.terrain.to_string();
-            let survival = stage.advance.map(|rule| rule.survival);
+            let survival = stage.advance.map(|rule| rule.describe());
             match runs.last_mut() {
                 Some((last, n, None)) if *last == terrain && survival.is_none() => {
                     *n += stage.iterations
@@ -64,7 +64,7 @@ impl Recipe {
             .iter()
             .map(|(terrain, n, survival)| match survival {
                 None => format!("{terrain} x{n}"),
-                Some(s) => format!("{terrain} x{n} at most (until {s} of episodes survive)"),
+                Some(rule) => format!("{terrain} x{n} at most (until {rule})"),
             })
             .collect();
         let at_most = if experiment.has_advance_rules() {

@@ -8,18 +8,22 @@
 //! iterations = 260     # at most
 //! [curriculum.advance]
 //! survival = 0.95      # the share of the window's ended episodes that did not fall
+//! distance_m = 1.0     # optional: and their mean distance walked, m
 //! window = 10          # iterations, all of them in this stage
 //! ```
 //!
 //! After each iteration of the stage that completes a window, the share of
 //! the episodes that ended in the window's iterations by the time limit
-//! rather than by a fall is compared with `survival`; the stage ends after
-//! the first iteration where it is reached, or after `iterations`. A window
-//! in which no episode ended had no fall: its share is 1.
+//! rather than by a fall is compared with `survival`, and with `distance_m`
+//! their mean distance (each iteration's `mean_distance_m` weighted by its
+//! ended episodes; legged_gym promotes a robot by the distance it walked);
+//! the stage ends after the first iteration where both are reached, or
+//! after `iterations`. A window in which no episode ended had no fall (its
+//! share is 1) and shows no distance (a `distance_m` is not reached).
 //!
 //! The decision reads only what `metrics.jsonl` records (each iteration's
-//! `episodes` and `terminated`, integers), so a resumed or forked run
-//! decides from its history exactly as the uninterrupted run did.
+//! `episodes`, `terminated` and `mean_distance_m`), so a resumed or forked
+//! run decides from its history exactly as the uninterrupted run did.
 
 use std::path::Path;
 
@@ -37,6 +41,9 @@ pub struct Advance {
     /// the share of the window's ended episodes that ended without a fall
     /// (by the time limit) at which the stage ends, in (0, 1]
     pub survival: f64,
+    /// the mean distance the window's ended episodes walked at which the
+    /// stage ends (with `survival`), m; `None`: survival alone
+    pub distance_m: Option<f64>,
     /// iterations in the window, at least 1 and at most the stage's
     /// (default [`DEFAULT_WINDOW`], or the stage's iterations if fewer)
     pub window: u64,
@@ -47,6 +54,8 @@ pub struct Advance {
 #[serde(deny_unknown_fields)]
 pub(super) struct AdvanceSection {
     survival: f64,
+    #[serde(default)]
+    distance_m: Option<f64>,
     #[serde(default)]
     window: Option<u64>,
 }
@@ -60,6 +69,13 @@ impl AdvanceSection {
                 self.survival
             ));
         }
+        if let Some(d) = self.distance_m
+            && !(d.is_finite() && d > 0.0)
+        {
+            return Err(format!(
+                "distance_m must be a positive distance, m, got {d}"
+            ));
+        }
         let window = self.window.unwrap_or(DEFAULT_WINDOW.min(iterations));
         if window == 0 || window > iterations {
             return Err(format!(
@@ -68,6 +84,7 @@ impl AdvanceSection {
         }
         Ok(Advance {
             survival: self.survival,
+            distance_m: self.distance_m,
             window,
         })
     }
@@ -75,29 +92,59 @@ impl AdvanceSection {
 
 impl Advance {
     /// Whether `window` (the window's iterations, oldest first) reaches
-    /// the rule's survival.
+    /// the rule's survival and distance.
     pub fn is_reached(&self, window: &[EpisodeCounts]) -> bool {
         let ended: u64 = window.iter().map(|c| c.ended).sum();
         let fell: u64 = window.iter().map(|c| c.fell).sum();
-        ended == 0 || (ended - fell) as f64 >= self.survival * ended as f64
+        let survives = ended == 0 || (ended - fell) as f64 >= self.survival * ended as f64;
+        let walks = match self.distance_m {
+            None => true,
+            Some(d) => {
+                let walked: f64 = window
+                    .iter()
+                    .map(|c| c.mean_distance_m * c.ended as f64)
+                    .sum();
+                ended > 0 && walked >= d * ended as f64
+            }
+        };
+        survives && walks
+    }
+
+    /// The rule in words, for messages.
+    pub fn describe(&self) -> String {
+        match self.distance_m {
+            None => format!("survival {} over {} iterations", self.survival, self.window),
+            Some(d) => format!(
+                "survival {} and {d} m walked over {} iterations",
+                self.survival, self.window
+            ),
+        }
     }
 }
 
 /// One iteration's episodes, as `metrics.jsonl` records them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EpisodeCounts {
     /// episodes that ended in the iteration (`episodes`)
     pub ended: u64,
     /// of them, by a fall (`terminated`)
     pub fell: u64,
+    /// their mean distance walked, m (`mean_distance_m`; 0 where none ended)
+    pub mean_distance_m: f64,
 }
 
 impl EpisodeCounts {
     /// The counts of one `metrics.jsonl` line, `None` where it lacks them.
     pub fn of_record(record: &serde_json::Value) -> Option<Self> {
+        let ended = record["episodes"].as_u64()?;
         Some(Self {
-            ended: record["episodes"].as_u64()?,
+            ended,
             fell: record["terminated"].as_u64()?,
+            mean_distance_m: match record["mean_distance_m"].as_f64() {
+                Some(d) => d,
+                None if ended == 0 => 0.0,
+                None => return None,
+            },
         })
     }
 }
@@ -123,7 +170,7 @@ pub fn read_history(path: &Path, iterations: u64) -> Result<Vec<EpisodeCounts>> 
             history[iteration as usize - 1] =
                 Some(EpisodeCounts::of_record(&record).with_context(|| {
                     format!(
-                        "{} line {}: no episodes/terminated counts",
+                        "{} line {}: no episodes/terminated/mean_distance_m",
                         path.display(),
                         n + 1
                     )
@@ -187,7 +234,11 @@ mod tests {
 
     fn counts(list: &[(u64, u64)]) -> Vec<EpisodeCounts> {
         list.iter()
-            .map(|&(ended, fell)| EpisodeCounts { ended, fell })
+            .map(|&(ended, fell)| EpisodeCounts {
+                ended,
+                fell,
+                mean_distance_m: 0.0,
+            })
             .collect()
     }
 
@@ -195,6 +246,7 @@ mod tests {
     fn survival_is_the_share_of_ended_episodes_that_did_not_fall() {
         let rule = Advance {
             survival: 0.9,
+            distance_m: None,
             window: 2,
         };
         assert!(rule.is_reached(&counts(&[(10, 1), (10, 1)]))); // 18 of 20
@@ -202,6 +254,7 @@ mod tests {
         assert!(rule.is_reached(&counts(&[(0, 0), (0, 0)]))); // nothing fell
         let all = Advance {
             survival: 1.0,
+            distance_m: None,
             window: 1,
         };
         assert!(all.is_reached(&counts(&[(16, 0)])));
@@ -209,8 +262,40 @@ mod tests {
     }
 
     #[test]
+    fn distance_is_the_episode_weighted_mean_of_the_window() {
+        let rule = Advance {
+            survival: 0.5,
+            distance_m: Some(1.0),
+            window: 2,
+        };
+        let walked = |list: &[(u64, u64, f64)]| -> Vec<EpisodeCounts> {
+            list.iter()
+                .map(|&(ended, fell, d)| EpisodeCounts {
+                    ended,
+                    fell,
+                    mean_distance_m: d,
+                })
+                .collect()
+        };
+        // (30 x 0.5 + 10 x 2.5) / 40 = 1.0: reached
+        assert!(rule.is_reached(&walked(&[(30, 0, 0.5), (10, 0, 2.5)])));
+        // (10 x 0.5 + 30 x 1.2) / 40 = 1.025 but 25 of 40 fell
+        assert!(!rule.is_reached(&walked(&[(10, 5, 0.5), (30, 20, 1.2)])));
+        // no episode ended: nothing walked is shown
+        assert!(!rule.is_reached(&walked(&[(0, 0, 0.0), (0, 0, 0.0)])));
+        assert!(rule.describe().contains("1 m walked over 2 iterations"));
+    }
+
+    #[test]
     fn a_rule_outside_its_ranges_is_refused_with_the_reason() {
-        let resolve = |survival, window| AdvanceSection { survival, window }.resolve(10);
+        let resolve = |survival, window| {
+            AdvanceSection {
+                survival,
+                distance_m: None,
+                window,
+            }
+            .resolve(10)
+        };
         let bad = |survival, window| resolve(survival, window).unwrap_err();
         assert!(bad(0.0, Some(5)).contains("survival must be in (0, 1]"));
         assert!(bad(1.5, Some(5)).contains("survival must be in (0, 1]"));
@@ -218,9 +303,20 @@ mod tests {
         assert!(bad(0.9, Some(0)).contains("window must be 1 to the stage's 10"));
         assert!(bad(0.9, Some(11)).contains("window must be 1 to the stage's 10"));
         assert_eq!(resolve(0.9, None).unwrap().window, DEFAULT_WINDOW);
+        let far = AdvanceSection {
+            survival: 0.9,
+            distance_m: Some(-1.0),
+            window: None,
+        };
+        assert!(
+            far.resolve(10)
+                .unwrap_err()
+                .contains("distance_m must be a positive distance")
+        );
         assert_eq!(
             AdvanceSection {
                 survival: 0.9,
+                distance_m: None,
                 window: None
             }
             .resolve(4)
@@ -291,6 +387,11 @@ mod tests {
             e.to_toml()
                 .contains("[curriculum.advance]\nsurvival = 0.9\nwindow = 2\n")
         );
+        let walked = READY.replacen("window = 2\n", "distance_m = 0.75\nwindow = 2\n", 1);
+        let e2 = Experiment::from_toml_builtin(&walked, "walked.toml").unwrap();
+        assert_eq!(e2.curriculum[0].advance.unwrap().distance_m, Some(0.75));
+        let again = Experiment::from_toml_builtin(&e2.to_toml(), "again.toml").unwrap();
+        assert_eq!(again.curriculum, e2.curriculum);
         let default_window = READY.replace("window = 2\n", "");
         let e = Experiment::from_toml_builtin(&default_window, "w.toml").unwrap();
         assert_eq!(e.curriculum[0].advance.unwrap().window, 5);
@@ -322,7 +423,7 @@ mod tests {
         let path = dir.join("metrics.jsonl");
         std::fs::write(
             &path,
-            "{\"iteration\":1,\"episodes\":16,\"terminated\":3}\n{\"iteration\":2,\"episodes\":16,\"terminated\":0}\n{\"iteration\":3,\"episodes\":17,\"terminated\":1}\n",
+            "{\"iteration\":1,\"episodes\":16,\"terminated\":3,\"mean_distance_m\":0.0}\n{\"iteration\":2,\"episodes\":16,\"terminated\":0,\"mean_distance_m\":0.0}\n{\"iteration\":3,\"episodes\":17,\"terminated\":1,\"mean_distance_m\":0.5}\n",
         )
         .unwrap();
         assert_eq!(read_history(&path, 2).unwrap(), counts(&[(16, 3), (16, 0)]));

@@ -304,9 +304,13 @@ impl Experiment {
             }
             if let Some(rule) = &stage.advance {
                 text.push_str(&format!(
-                    "\n[curriculum.advance]\nsurvival = {:?}\nwindow = {}\n",
-                    rule.survival, rule.window
+                    "\n[curriculum.advance]\nsurvival = {:?}\n",
+                    rule.survival
                 ));
+                if let Some(d) = rule.distance_m {
+                    text.push_str(&format!("distance_m = {d:?}\n"));
+                }
+                text.push_str(&format!("window = {}\n", rule.window));
             }
             if !stage.task_overrides.is_empty() {
                 text.push_str("\n[curriculum.task]\n");

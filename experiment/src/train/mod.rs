@@ -30,7 +30,7 @@ pub use plan::RunPlan;
 use run_dir::{CONFIG_FILE, METRICS_FILE, append_line, keep_metrics_up_to, save_checkpoint};
 
 use crate::config::Experiment;
-use crate::config::advance;
+use crate::config::advance::{self, Advance};
 use crate::task_env::TaskEnv;
 
 /// How a run began, told once before its first iteration.
@@ -82,7 +82,7 @@ pub trait TrainObserver {
     /// A stage's `[curriculum.advance]` rule was reached after `iterations`
     /// of its iterations (before its maximum): the next iteration starts the
     /// next stage.
-    fn stage_ready(&mut self, _stage: usize, _iterations: u64, _survival: f64) {}
+    fn stage_ready(&mut self, _stage: usize, _iterations: u64, _rule: &Advance) {}
     /// After each iteration, once its metrics line is written.
     fn iteration_done(&mut self, _report: &IterationReport) -> Result<()> {
         Ok(())
@@ -257,7 +257,7 @@ pub fn train(
                 && n < current.iterations
                 && experiment.terrain_at(iteration + 1).0 != stage
             {
-                observer.stage_ready(stage, n, rule.survival);
+                observer.stage_ready(stage, n, &rule);
             }
         }
         let total = experiment.total_iterations();

@@ -67,7 +67,9 @@ impl Policy {
             let run = if learn::export::is_exported_policy(&dir) {
                 Some(dir.clone())
             } else {
-                crate::train::run_dir::run_dir_of(&dir)
+                // a run's `latest` leads to checkpoints/iter-N inside it
+                let checkpoint = std::fs::canonicalize(&dir).unwrap_or_else(|_| dir.clone());
+                crate::train::run_dir::run_dir_of(&checkpoint)
             };
             let metrics = run
                 .map(|r| r.join(crate::train::run_dir::METRICS_FILE))

@@ -483,17 +483,20 @@ fn a_stage_that_moves_on_when_ready_ends_early_and_resumes_and_forks_exactly() {
     assert_eq!(weights(&runs.a), weights(&forked));
     let policy = runs.a.with_file_name("policy");
     ok(&["export", "--checkpoint", s(&runs.a), "--out", s(&policy)]);
-    let rollout = json_of(&[
-        "rollout",
-        "--policy",
-        s(&policy),
-        "--terrain",
-        "rigid",
-        "--phases",
-        "2",
-        "--json",
-    ]);
-    assert_eq!(rollout["phases"], 2);
+    // the policy acts, exported, as the run and as one of its checkpoints
+    for acting in [&policy, &runs.a, &boundary] {
+        let rollout = json_of(&[
+            "rollout",
+            "--policy",
+            s(acting),
+            "--terrain",
+            "rigid",
+            "--phases",
+            "2",
+            "--json",
+        ]);
+        assert_eq!(rollout["phases"], 2, "{}", acting.display());
+    }
 }
 
 /// `export --with-checkpoint`: the exported policy carries its checkpoint,

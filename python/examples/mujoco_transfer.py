@@ -147,8 +147,8 @@ def policies(args) -> dict:
                 policy=policy, terrain=terrain,
                 quadwalk=dict(success=qs["successes"], episodes=qs["episodes"],
                               distance_m=qs["distance_m"]["mean"],
-                              speed_m_per_s=qs.get("speed_m_per_s", {}).get("mean") if isinstance(qs.get("speed_m_per_s"), dict) else None,
-                              falls=qs.get("falls")),
+                              speed_m_per_s=qs["mean_speed_m_per_s"]["mean"],
+                              falls=qs["falls_by_cause"]),
                 mujoco=dict(success=sum(e["fall"] is None for e in episodes), episodes=len(episodes),
                             distance_m=float(np.mean([e["distance_m"] for e in episodes])),
                             speed_m_per_s=float(np.mean([e["speed_m_per_s"] for e in episodes])),
@@ -173,13 +173,26 @@ def markdown(result: dict, command: str) -> str:
             out.append(f"| {r['check']} | `{r['terrain']}` | {r['quadwalk']:.2f} | {r['mujoco']:.2f}{fall} |")
         out.append("")
     if "policies" in result:
-        out += ["| policy | terrain | quadwalk: success, mean distance | MuJoCo: success, mean distance, mean phases, falls |",
+        out += ["| policy | terrain | quadwalk: success, mean distance, speed, falls | MuJoCo: success, mean distance, speed, mean phases, falls |",
                 "| --- | --- | --- | --- |"]
+
+        def speed(v):
+            return "-" if v is None else f"{v:.3f} m/s"
+
+        def falls(v):
+            if v is None:
+                return "-"
+            return ", ".join(f"{k} {n}" for k, n in sorted(v.items())) or "none"
+
         for r in result["policies"]:
             q, m = r["quadwalk"], r["mujoco"]
-            falls = ", ".join(f"{k} {v}" for k, v in sorted(m["falls"].items())) or "none"
-            out.append(f"| {r['policy']} | `{r['terrain']}` | {q['success']}/{q['episodes']}, {q['distance_m']:.2f} m "
-                       f"| {m['success']}/{m['episodes']}, {m['distance_m']:.2f} m, {m['phases']:.0f}, {falls} |")
+            out.append(f"| {r['policy']} | `{r['terrain']}` | {q['success']}/{q['episodes']}, {q['distance_m']:.2f} m, "
+                       f"{speed(q['speed_m_per_s'])}, {falls(q['falls'])} "
+                       f"| {m['success']}/{m['episodes']}, {m['distance_m']:.2f} m, {speed(m['speed_m_per_s'])}, "
+                       f"{m['phases']:.0f}, {falls(m['falls'])} |")
+        out.append("")
+        if any(r["quadwalk"]["falls"] is None for r in result["policies"]):
+            out.append("(-: not recorded by the version of the script that made this run.)")
         out.append("")
     return "\n".join(out)
 

@@ -86,13 +86,7 @@ fn robot_state(
         let f = values(state, "feet_in_world_m", 12)?;
         std::array::from_fn(|leg| Vector3::new(f[3 * leg], f[3 * leg + 1], f[3 * leg + 2]))
     } else if state.contains("joint_angles_rad")? {
-        let joints = controller
-            .leg_joints()
-            .iter()
-            .flatten()
-            .max()
-            .map_or(0, |j| j + 1);
-        let q = values(state, "joint_angles_rad", joints)?;
+        let q = values(state, "joint_angles_rad", controller.joint_count())?;
         RobotState::feet_by_kinematics(controller.legs(), controller.leg_joints(), &base_pose, &q)
     } else {
         return Err(PyValueError::new_err(
@@ -286,14 +280,7 @@ impl Controller {
             )));
         }
         let plan = self.plan()?;
-        let joints = self
-            .inner
-            .leg_joints()
-            .iter()
-            .flatten()
-            .max()
-            .map_or(0, |j| j + 1);
-        let mut targets = vec![0.0; joints];
+        let mut targets = vec![0.0; self.inner.joint_count()];
         self.inner.joint_targets(plan, sample, &mut targets);
         Ok(PyArray1::from_vec(py, targets))
     }

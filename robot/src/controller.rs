@@ -143,6 +143,7 @@ struct Memory {
 pub struct PhaseController {
     legs: [LegKinematics; 4],
     leg_joints: [[usize; 3]; 4],
+    /// the squat, one angle per joint of the model
     squat_rad: Vec<f64>,
     squat_feet_in_base_m: [Vector3<f64>; 4],
     observation: ObservationConfig,
@@ -240,6 +241,11 @@ impl PhaseController {
     /// The swing leg of the phase about to run.
     pub fn swing_leg(&self) -> LegName {
         SWING_ORDER[self.memory.phase % 4]
+    }
+
+    /// The robot's joints (the length of joint-angle and target vectors).
+    pub fn joint_count(&self) -> usize {
+        self.squat_rad.len()
     }
 
     /// The squat every episode starts from, joint angles in the model's

@@ -92,8 +92,7 @@ impl RobotState {
 
     /// The feet in the base frame.
     pub fn feet_in_base_m(&self) -> [Vector3<f64>; 4] {
-        let inv = self.base_pose.inverse();
-        self.feet_in_world_m.map(|f| (inv * Point3::from(f)).coords)
+        feet_in_base_m(&self.base_pose, self.feet_in_world_m)
     }
 
     /// The mean of h_b, m.
@@ -102,11 +101,25 @@ impl RobotState {
     }
 
     /// A world point (x, y) in the base frame (x, y; z dropped).
-    pub fn in_base(&self, [x, y]: [f64; 2]) -> nalgebra::Vector2<f64> {
-        let base = self.base_pose;
-        let p = base.inverse() * Point3::new(x, y, base.translation.z);
-        nalgebra::Vector2::new(p.x, p.y)
+    pub fn in_base(&self, xy_m: [f64; 2]) -> nalgebra::Vector2<f64> {
+        point_in_base(&self.base_pose, xy_m)
     }
+}
+
+/// World feet in the frame of a base at `base_pose`.
+pub fn feet_in_base_m(
+    base_pose: &Isometry3<f64>,
+    feet_in_world_m: [Vector3<f64>; 4],
+) -> [Vector3<f64>; 4] {
+    let inv = base_pose.inverse();
+    feet_in_world_m.map(|f| (inv * Point3::from(f)).coords)
+}
+
+/// A world point (x, y) in the frame of a base at `base_pose` (taken at the
+/// base's height; z dropped).
+pub fn point_in_base(base_pose: &Isometry3<f64>, [x, y]: [f64; 2]) -> nalgebra::Vector2<f64> {
+    let p = base_pose.inverse() * Point3::new(x, y, base_pose.translation.z);
+    nalgebra::Vector2::new(p.x, p.y)
 }
 
 /// One phase, planned at its start from the action.

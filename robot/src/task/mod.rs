@@ -125,7 +125,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::action::{ACTION_SIZE, SAMPLES_PER_PHASE};
-use crate::controller::{PhaseController, RobotState};
+use crate::controller::{PhaseController, RobotState, feet_in_base_m, point_in_base};
 use crate::model::LegName;
 use crate::snapshot::{NoObserver, PhaseObserver, PhaseStart, StepSnapshot};
 use crate::world::{DT_SECS, World};
@@ -520,10 +520,7 @@ impl Task {
 
     /// Feet in the current base frame.
     fn feet_in_base(&self) -> [Vector3<f64>; 4] {
-        let inv = self.world.base_pose().inverse();
-        self.world
-            .feet_in_world_m()
-            .map(|f| (inv * nalgebra::Point3::from(f)).coords)
+        feet_in_base_m(&self.world.base_pose(), self.world.feet_in_world_m())
     }
 
     /// The base height the reward and termination use: the mean of h_b, m.
@@ -542,10 +539,8 @@ impl Task {
     }
 
     /// A world point (x, y) in the base frame (x, y; z dropped).
-    fn in_base(&self, [x, y]: [f64; 2]) -> nalgebra::Vector2<f64> {
-        let base = self.world.base_pose();
-        let p = base.inverse() * nalgebra::Point3::new(x, y, base.translation.z);
-        nalgebra::Vector2::new(p.x, p.y)
+    fn in_base(&self, xy_m: [f64; 2]) -> nalgebra::Vector2<f64> {
+        point_in_base(&self.world.base_pose(), xy_m)
     }
 
     /// What R_o measures the heading against, in the base frame: the

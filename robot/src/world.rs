@@ -435,6 +435,36 @@ impl World {
         })
     }
 
+    /// The inclination of the rest surface under the robot along its
+    /// heading, radians, in the sense of the base's pitch (nalgebra's Euler
+    /// pitch, about y: a base lying on ground that rises ahead has a
+    /// negative pitch, and so has this): -atan2(rise, run) from the rest
+    /// height below the mean of the front hips to that below the mean of
+    /// the rear hips. 0 where the ground at rest is level.
+    pub fn ground_pitch_rad(&self) -> f64 {
+        let base = self.base_pose();
+        let (mut front, mut rear) = (Vec::with_capacity(2), Vec::with_capacity(2));
+        for leg in self.legs() {
+            let hip = base * Point3::from(leg.abduction_m);
+            if leg.abduction_m.x > 0.0 {
+                front.push(hip);
+            } else {
+                rear.push(hip);
+            }
+        }
+        let mean = |points: &[Point3<f64>]| {
+            let n = points.len().max(1) as f64;
+            points
+                .iter()
+                .fold(Vector3::zeros(), |sum, p| sum + p.coords)
+                / n
+        };
+        let (front, rear) = (mean(&front), mean(&rear));
+        let run = (front.xy() - rear.xy()).norm();
+        let rise = self.rest_height_m(front.x, front.y) - self.rest_height_m(rear.x, rear.y);
+        -rise.atan2(run)
+    }
+
     /// The mean of h_b, the base height the task's reward and termination
     /// use, m.
     pub fn base_height_m(&self) -> f64 {

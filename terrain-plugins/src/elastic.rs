@@ -3,6 +3,9 @@
 //! standing robot sink `depth` (see [`crate::tiles`] for the derivation).
 //! `elastic:2..5cm` gives each tile its own depth, drawn uniformly from the
 //! range with the world's seed (per-tile domain randomisation).
+//! `elastic:5cm:slope=10` lays the tiles on a hill: rising at 10 degrees from
+//! the field's back edge to its middle, falling to its far end (springs
+//! still vertical, see [`crate::tiles`]).
 
 use crate::spec::{ParamDecl, ParamKind, Surface, TerrainSpec};
 use crate::tiles::{RegionLayout, TileParams, TiledTerrain, tile_param_decls};
@@ -31,7 +34,7 @@ impl TerrainPlugin for ElasticPlugin {
     }
 
     fn validate(&self, spec: &TerrainSpec) -> Result<(), String> {
-        TileParams::from_spec(spec).validate([spec.depth_range_m("depth").1])
+        TileParams::from_spec(spec).validate([spec.depth_range_m("depth").1], [])
     }
 
     fn create(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {

@@ -114,6 +114,12 @@ pub struct TileState {
     pub side_m: f64,
     /// How far the tile is pushed down from rest, metres (positive = down).
     pub sink_m: f64,
+    /// Height of the centre of the tile's top face at rest, metres (0 on
+    /// flat ground).
+    pub rest_top_m: f64,
+    /// Rise of the tile's top face along x at rest, dz/dx (0 on flat
+    /// ground; tiles on a hill are inclined about y).
+    pub rest_slope: f64,
     /// The region the tile belongs to.
     pub region: usize,
 }

@@ -191,13 +191,14 @@ impl TerrainPlugin for SoilPlugin {
     fn validate(&self, spec: &TerrainSpec) -> Result<(), String> {
         let soil = SoilParams::from_spec(spec);
         soil.validate()?;
-        TileParams::from_spec(spec).validate([soil.depth_m])
+        TileParams::from_spec(spec).validate([soil.depth_m], [])
     }
 
     fn create(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {
         let layout = RegionLayout::Uniform(Surface {
             ground: Ground::Soil(SoilParams::from_spec(spec)),
             friction: None,
+            slope_deg: None,
         });
         Box::new(TiledTerrain::new(
             spec.clone(),

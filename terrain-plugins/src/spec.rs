@@ -105,20 +105,26 @@ impl Ground {
 }
 
 /// One surface of a [`ParamKind::Surfaces`] list, or of a tiled terrain:
-/// its ground and, if it has its own, its friction coefficient.
+/// its ground and, if it has its own, its friction coefficient and the
+/// inclination of its tiles.
 ///
 /// In a list a surface is written `5cm`, `2..5cm`, `rigid`, or as a spec of
 /// the `rigid`, `elastic`, `soil`, `rough`, `slope` or `steps` plugin in
-/// parentheses, which may name the region's friction:
-/// `(rigid:friction=0.1)`, `(soil:4cm:yield=0.4)`,
-/// `(elastic:5cm:friction=0.5)`, `(slope:10)`, `(steps:5cm:30cm)`. In a TOML list the parentheses may be left
-/// out: `surfaces = ["5cm", "soil:4cm", "rigid:friction=0.1"]`.
+/// parentheses, which may name the region's friction and, for tiles, their
+/// slope: `(rigid:friction=0.1)`, `(soil:4cm:yield=0.4)`,
+/// `(elastic:5cm:friction=0.5)`, `(elastic:5cm:slope=10)`, `(slope:10)`,
+/// `(steps:5cm:30cm)`. In a TOML list the parentheses may be left out:
+/// `surfaces = ["5cm", "soil:4cm", "rigid:friction=0.1"]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Surface {
     /// what the ground is made of
     pub ground: Ground,
     /// the region's friction coefficient; `None`: the terrain's
     pub friction: Option<f64>,
+    /// tiles only: the inclination of the region's rest surface, degrees (a
+    /// hill up to the region's middle and down to its end, see
+    /// [`crate::tiles`]); `None`: the terrain's
+    pub slope_deg: Option<f64>,
 }
 
 impl Surface {
@@ -127,6 +133,7 @@ impl Surface {
         Self {
             ground: Ground::Rigid,
             friction: None,
+            slope_deg: None,
         }
     }
 
@@ -135,6 +142,7 @@ impl Surface {
         Self {
             ground: Ground::Elastic { depth_m },
             friction: None,
+            slope_deg: None,
         }
     }
 
@@ -153,6 +161,7 @@ impl Surface {
         Self {
             ground,
             friction: None,
+            slope_deg: None,
         }
     }
 
@@ -162,7 +171,8 @@ impl Surface {
     }
 
     /// The surface as a spec of its own (`rigid`, `elastic:5cm`,
-    /// `soil:4cm:...`, with `:friction=` if it has its own): a region's label.
+    /// `soil:4cm:...`, with `:friction=` and `:slope=` if it has its own): a
+    /// region's label.
     pub fn label(&self) -> String {
         let text = match self.ground {
             Ground::Rigid => "rigid".to_string(),
@@ -170,6 +180,7 @@ impl Surface {
                 "elastic:{}",
                 Self {
                     friction: None,
+                    slope_deg: None,
                     ..*self
                 }
             ),
@@ -192,8 +203,12 @@ impl Surface {
                 format_length(length_m)
             ),
         };
-        match self.friction {
+        let text = match self.friction {
             Some(mu) => format!("{text}:friction={mu}"),
+            None => text,
+        };
+        match self.slope_deg {
+            Some(degrees) => format!("{text}:slope={degrees}"),
             None => text,
         }
     }
@@ -204,9 +219,10 @@ impl Surface {
     /// extent) is refused: a region takes those from the terrain it is part
     /// of (`steps`' `length`, the run of a step, is the region's own).
     pub fn from_spec(spec: &TerrainSpec) -> Result<Self, String> {
-        const REGION_PARAMS: [&str; 9] = [
+        const REGION_PARAMS: [&str; 10] = [
             "depth",
             "friction",
+            "slope",
             "elastic",
             "yield",
             "recovery",
@@ -227,10 +243,13 @@ impl Surface {
                 decl.name
             ));
         }
-        let friction = spec
-            .params()
-            .find(|(d, _)| d.name == "friction")
-            .and_then(|(d, v)| (d.default.as_ref() != Some(v)).then(|| spec.number("friction")));
+        let own_number = |name: &str| {
+            spec.params()
+                .find(|(d, _)| d.name == name)
+                .and_then(|(d, v)| (d.default.as_ref() != Some(v)).then(|| spec.number(name)))
+        };
+        let friction = own_number("friction");
+        let slope_deg = own_number("slope");
         let ground = match spec.plugin() {
             "rigid" => Ground::Rigid,
             "elastic" => {
@@ -253,7 +272,11 @@ impl Surface {
                 return Err(format!("a region is {REGION_KINDS}, not {other}"));
             }
         };
-        Ok(Self { ground, friction })
+        Ok(Self {
+            ground,
+            friction,
+            slope_deg,
+        })
     }
 }
 
@@ -261,7 +284,7 @@ impl fmt::Display for Surface {
     /// The short forms (`rigid`, `5cm`, `2cm..5cm`) where they say it all,
     /// else the spec in parentheses.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match (&self.ground, self.friction) {
+        match (&self.ground, self.friction.or(self.slope_deg)) {
             (Ground::Rigid, None) => f.write_str("rigid"),
             (Ground::Elastic { depth_m }, None) => f.write_str(&format_length(*depth_m)),
             (

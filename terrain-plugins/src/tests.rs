@@ -84,6 +84,15 @@ fn display_is_canonical_and_round_trips() {
             "soil:4cm:elastic=5mm:yield=0.3:recovery=2",
             "soil:4cm:elastic=5mm:yield=0.3:recovery=2",
         ),
+        ("elastic:5cm:slope=10.0", "elastic:5cm:slope=10"),
+        (
+            "varying:4m:5cm,(elastic:50mm:slope=5:friction=0.5),(soil:4cm:slope=10)",
+            "varying:4m:5cm,(elastic:5cm:friction=0.5:slope=5),(soil:4cm:slope=10)",
+        ),
+        (
+            "varying:2m:(elastic:5cm:slope=0),rigid",
+            "varying:2m:5cm,rigid",
+        ),
     ] {
         let spec = parse(input).unwrap();
         assert_eq!(spec.to_string(), canonical);
@@ -802,6 +811,88 @@ fn relief_surfaces_are_where_their_colliders_are() {
     let (world, steps) = world_with("steps:5cm:1m", 0);
     assert_eq!(steps.surface_height_m(&world, 2.5, 0.0), 0.1);
     assert_eq!(steps.surface_height_m(&world, -0.5, 0.0), 0.0);
+}
+
+#[test]
+fn tiles_on_a_hill_are_where_the_surface_says_and_meet_at_their_edges() {
+    // 4 m regions: a hill of tiles in [3.9, 7.9], crest at 5.9 (a cell edge)
+    let spec = "varying:4m:5cm,(elastic:5cm:slope=10)";
+    let (world, terrain) = world_with(spec, 1);
+    assert_eq!(terrain.regions()[1].label, "elastic:5cm:slope=10");
+    let tan = 10f64.to_radians().tan();
+    let (x0, x1) = terrain.regions()[1].x_range_m;
+    let hill = |x: f64| tan * (x - x0).min(x1 - x);
+    // on the hill's sides the tops are the hill itself
+    for x in [4.3, 5.0, 5.65, 6.5, 7.42] {
+        let h = terrain.surface_height_m(&world, x, 0.3);
+        // (bodies are single precision: a tile at rest is within 1e-6 m)
+        assert!(
+            (h - hill(x)).abs() < 1e-6,
+            "x {x}: surface {h}, hill {}",
+            hill(x)
+        );
+        assert!((terrain.rest_height_m(x, 0.3) - hill(x)).abs() < 1e-12);
+    }
+    // neighbouring tiles' tops meet at their cells' edges (just either side)
+    for edge in [4.5, 5.9, 7.1] {
+        let (a, b) = (
+            terrain.surface_height_m(&world, edge - 1e-6, 0.0),
+            terrain.surface_height_m(&world, edge + 1e-6, 0.0),
+        );
+        assert!((a - b).abs() < 1e-5, "edge {edge}: {a} and {b}");
+    }
+    // a ball resting on a tile of the hill (it presses 0.8 mm) is there
+    for (x, y) in [(4.6, 0.2), (5.0, -0.4), (6.8, 1.0)] {
+        let h = terrain.surface_height_m(&world, x, y);
+        let rest = ball_rest_m(spec, 1, x, y);
+        assert!(
+            (rest - h).abs() < 1.5e-3,
+            "at ({x}, {y}): surface {h}, ball rests at {rest}"
+        );
+    }
+    // the viewers' tile states carry the rest top and its inclination
+    let mut tiles = Vec::new();
+    terrain.tiles_in(&world, crate::Rect::around([5.0, 0.0], 0.05), &mut tiles);
+    assert_eq!(tiles.len(), 1);
+    assert!((tiles[0].rest_top_m - hill(5.0)).abs() < 1e-9);
+    assert!((tiles[0].rest_slope - tan).abs() < 1e-9);
+    // flat regions stay flat
+    assert!(terrain.surface_height_m(&world, 1.0, 0.0).abs() < 1e-6);
+}
+
+#[test]
+fn a_tile_on_a_hill_sinks_its_depth_vertically_under_a_quarter_of_the_robot() {
+    // A ball free along z only, as heavy as a quarter of the standing robot,
+    // on a tile centre of a 10-degree side: the tilted face pushes it
+    // sideways too (into the ball's locked axes and the tile's), and the
+    // vertical spring carries the vertical load, so it sinks d along z.
+    for (spec, x, depth_m) in [
+        ("elastic:5cm:slope=10", 3.0, 0.05),
+        ("elastic:2cm:slope=5", 3.0, 0.02),
+        ("varying:4m:5cm,(elastic:3cm:slope=10)", 5.0, 0.03),
+    ] {
+        let (mut world, mut terrain) = world_with(spec, 1);
+        let rest = terrain.rest_height_m(x, 0.0);
+        let radius = 0.01;
+        let body = world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(x as f32, 0.0, (rest + radius + 0.002) as f32))
+                .lock_rotations()
+                .enabled_translations(false, false, true),
+        );
+        let ball = ColliderBuilder::ball(radius as f32)
+            .mass((STANDING_LOAD_N / 9.81) as f32)
+            .collision_groups(robot_collision_groups());
+        world.insert_collider(ball, Some(body));
+        for _ in 0..720 {
+            step(&mut world, &mut terrain);
+        }
+        let sink_m = rest - terrain.surface_height_m(&world, x, 0.0);
+        assert!(
+            (sink_m - depth_m).abs() < 0.02 * depth_m,
+            "{spec}: sink {sink_m}, expected {depth_m}"
+        );
+    }
 }
 
 #[test]

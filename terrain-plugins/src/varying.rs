@@ -7,7 +7,9 @@
 //! `varying:2m:5cm,(soil:4cm),(rough:1cm),(slope:10),(steps:5cm:30cm)`.
 //! A slope region is a hill and a steps region a flight of stairs, each up
 //! to the region's middle and down to its end, so that regions join at
-//! z = 0 (legged_gym's pyramid terrains, along x).
+//! z = 0 (legged_gym's pyramid terrains, along x). Tiles may lie on such a
+//! hill too: `(elastic:5cm:slope=10)`, `(soil:4cm:slope=5)`, or `slope=` on
+//! the whole spec for every tiled region without its own.
 
 use crate::relief::RegionRelief;
 use crate::spec::{Ground, ParamDecl, ParamKind, Surface, TerrainSpec};
@@ -60,8 +62,10 @@ impl TerrainPlugin for VaryingPlugin {
                 ));
             }
         }
-        let depths = spec.surfaces("surfaces").iter().map(Surface::max_depth_m);
-        params.validate(depths)
+        let surfaces = spec.surfaces("surfaces");
+        let depths = surfaces.iter().map(Surface::max_depth_m);
+        let slopes = surfaces.iter().filter_map(|s| s.slope_deg);
+        params.validate(depths, slopes)
     }
 
     fn create(&self, spec: &TerrainSpec, ctx: &BuildContext) -> Box<dyn Terrain> {

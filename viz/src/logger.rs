@@ -433,16 +433,18 @@ impl RolloutLogger {
                 );
             }
         }
-        // Tiles: the top face at -sink, 2 cm thick.
+        // Tiles: the top face at its rest height less the sink, 2 cm thick;
+        // tiles on a hill turned about y by their top's inclination.
         let thickness = 0.02f32;
         let centres: Vec<[f32; 3]> = snap
             .tiles
             .iter()
             .map(|t| {
+                let a = t.rest_slope.atan();
                 [
-                    t.center_m[0] as f32,
+                    (t.center_m[0] + f64::from(thickness) / 2.0 * a.sin()) as f32,
                     t.center_m[1] as f32,
-                    -(t.sink_m as f32) - thickness / 2.0,
+                    (t.rest_top_m - t.sink_m) as f32 - thickness / 2.0 * a.cos() as f32,
                 ]
             })
             .collect();
@@ -451,21 +453,24 @@ impl RolloutLogger {
             .iter()
             .map(|t| {
                 [
-                    t.side_m as f32 / 2.0,
+                    (t.side_m / 2.0 / t.rest_slope.atan().cos()) as f32,
                     t.side_m as f32 / 2.0,
                     thickness / 2.0,
                 ]
             })
             .collect();
         let colours: Vec<[u8; 3]> = snap.tiles.iter().map(|t| sink_colour(t.sink_m)).collect();
-        results.push(
-            rec.log(
-                "world/terrain/tiles",
-                &rerun::Boxes3D::from_centers_and_half_sizes(centres, halves)
-                    .with_colors(colours)
-                    .with_fill_mode(rerun::FillMode::Solid),
-            ),
-        );
+        let mut boxes = rerun::Boxes3D::from_centers_and_half_sizes(centres, halves)
+            .with_colors(colours)
+            .with_fill_mode(rerun::FillMode::Solid);
+        if snap.tiles.iter().any(|t| t.rest_slope != 0.0) {
+            // about y by -a: the box's x axis rises along (cos a, 0, sin a)
+            boxes = boxes.with_quaternions(snap.tiles.iter().map(|t| {
+                let half = -t.rest_slope.atan() / 2.0;
+                rerun::Quaternion::from_xyzw([0.0, half.sin() as f32, 0.0, half.cos() as f32])
+            }));
+        }
+        results.push(rec.log("world/terrain/tiles", &boxes));
         let sinks: Vec<f64> = snap.tiles.iter().map(|t| t.sink_m).collect();
         results.push(rec.log("tiles/sink_m", &rerun::Scalars::new(sinks)));
         let contact_points: Vec<[f32; 3]> = snap

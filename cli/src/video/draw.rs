@@ -23,8 +23,8 @@ pub struct FrameState<'a> {
     pub model: &'a RobotModel,
     /// each model body's pose
     pub body_poses: &'a [Isometry3<f64>],
-    /// the tiles near the base, each with the height of its top at rest
-    pub tiles: &'a [(TileState, f64)],
+    /// the tiles near the base
+    pub tiles: &'a [TileState],
     /// the ground's surface along the base's y, (x, z), increasing x
     pub ground_profile_m: &'a [(f64, f64)],
     /// the base's path so far
@@ -299,22 +299,45 @@ fn draw_side(area: &Area, view: &View, state: &FrameState) -> Result<()> {
             .map_err(plot_error)?;
     }
     // the row of tiles under the robot, deepest drawn last
-    let mut row: Vec<&(TileState, f64)> = state
+    let mut row: Vec<&TileState> = state
         .tiles
         .iter()
-        .filter(|(t, _)| (t.center_m[1] - view.centre.y).abs() <= 0.3)
+        .filter(|t| (t.center_m[1] - view.centre.y).abs() <= 0.3)
         .collect();
-    row.sort_by(|a, b| a.0.sink_m.total_cmp(&b.0.sink_m));
-    for (tile, rest_top_m) in row {
-        let top = rest_top_m - tile.sink_m;
+    row.sort_by(|a, b| a.sink_m.total_cmp(&b.sink_m));
+    for tile in row {
+        let top = tile.rest_top_m - tile.sink_m;
         let half = tile.side_m / 2.0;
-        let a = view.px(&Vector3::new(tile.center_m[0] - half, view.centre.y, top));
-        let b = view.px(&Vector3::new(
-            tile.center_m[0] + half,
-            view.centre.y,
-            top - 0.04,
-        ));
-        draw_tile(area, [a, b], tile.sink_m)?;
+        if tile.rest_slope == 0.0 {
+            let a = view.px(&Vector3::new(tile.center_m[0] - half, view.centre.y, top));
+            let b = view.px(&Vector3::new(
+                tile.center_m[0] + half,
+                view.centre.y,
+                top - 0.04,
+            ));
+            draw_tile(area, [a, b], tile.sink_m)?;
+        } else {
+            // a tile on a hill: its inclined top and a 4 cm side below it
+            let rise = tile.rest_slope * half;
+            let corners: Vec<(i32, i32)> = [
+                (-half, top - rise),
+                (half, top + rise),
+                (half, top + rise - 0.04),
+                (-half, top - rise - 0.04),
+            ]
+            .iter()
+            .map(|&(dx, z)| view.px(&Vector3::new(tile.center_m[0] + dx, view.centre.y, z)))
+            .collect();
+            area.draw(&Polygon::new(
+                corners.clone(),
+                rgb(viz::sink_colour(tile.sink_m)).filled(),
+            ))
+            .map_err(plot_error)?;
+            let mut outline = corners;
+            outline.push(outline[0]);
+            area.draw(&PathElement::new(outline, BLACK.mix(0.35)))
+                .map_err(plot_error)?;
+        }
     }
     draw_path(area, view, state)?;
     draw_robot(area, view, state)?;
@@ -334,7 +357,7 @@ fn draw_side(area: &Area, view: &View, state: &FrameState) -> Result<()> {
 
 fn draw_top(area: &Area, view: &View, state: &FrameState) -> Result<()> {
     area.fill(&SAND).map_err(plot_error)?;
-    for (tile, _) in state.tiles {
+    for tile in state.tiles {
         let half = tile.side_m / 2.0;
         let a = view.px(&Vector3::new(
             tile.center_m[0] - half,

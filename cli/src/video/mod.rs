@@ -215,13 +215,6 @@ impl VideoRecorder {
             },
             &mut tiles,
         );
-        let tiles: Vec<(TileState, f64)> = tiles
-            .into_iter()
-            .map(|t| {
-                let rest = world.rest_height_m(t.center_m[0], t.center_m[1]);
-                (t, rest)
-            })
-            .collect();
         let samples = 200;
         let ground_profile_m: Vec<(f64, f64)> = (0..=samples)
             .map(|k| {

@@ -248,6 +248,8 @@ impl Terrain for Pontoons {
                     center_m,
                     side_m: self.plate_m - GAP_M,
                     sink_m: self.sink_m(world, i),
+                    rest_top_m: 0.0,
+                    rest_slope: 0.0,
                     region: 0,
                 });
             }

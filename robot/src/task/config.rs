@@ -18,6 +18,9 @@
 //!                                # this far away (default 0: the current goal, the paper's)
 //! balance_terms = "penalty"      # R_o, R_s, R_t, R_r shifted by their best value
 //!                                # (standing earns ~0); "paper": the paper's
+//! pitch_reference = "world"      # the paper's: the pitch termination measures from
+//!                                # the horizontal; "ground": from the rest surface's
+//!                                # inclination under the robot (slopes, hills)
 //! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
 //!                                # action is a residual on the crawl (+27 observations)
 //!
@@ -120,6 +123,46 @@ impl BalanceTerms {
     }
 }
 
+/// What the pitch termination measures the base's pitch against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub enum PitchReference {
+    /// The paper's: the horizontal.
+    #[default]
+    World,
+    /// The rest surface under the robot along its heading (its inclination
+    /// between the ground below the front hips and below the rear hips, see
+    /// `World::ground_pitch_rad`): on a slope the termination judges the
+    /// base against the slope, as it judges it against flat ground; the
+    /// same as `World` wherever the ground at rest is level (every flat
+    /// terrain, tiles included).
+    Ground,
+}
+
+impl PitchReference {
+    /// Whether this is the paper's reference, the horizontal.
+    pub fn is_world(&self) -> bool {
+        *self == Self::World
+    }
+
+    /// The name used in configuration files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::World => "world",
+            Self::Ground => "ground",
+        }
+    }
+
+    /// Parses [`Self::name`]'s output.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "world" => Some(Self::World),
+            "ground" => Some(Self::Ground),
+            _ => None,
+        }
+    }
+}
+
 /// What a policy's action is added to (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(try_from = "String", into = "String")]
@@ -187,6 +230,11 @@ pub struct TaskConfig {
     pub min_base_height_m: f64,
     /// termination: |pitch| above this, degrees
     pub max_pitch_deg: f64,
+    /// what the pitch termination measures the pitch against (left out of
+    /// a written file when it is the paper's, so that the files of runs
+    /// from before it existed read back byte for byte)
+    #[serde(skip_serializing_if = "PitchReference::is_world")]
+    pub pitch_reference: PitchReference,
     /// the reward of a terminated phase
     pub termination_reward: f64,
     /// after a reset the robot stands this long holding the squat, so that
@@ -334,6 +382,7 @@ impl Default for TaskConfig {
             start_y_range_m: (-0.2, 0.2),
             min_base_height_m: 0.20,
             max_pitch_deg: 15.0,
+            pitch_reference: PitchReference::default(),
             termination_reward: -10.0,
             observation: ObservationConfig::default(),
             settle_secs: 0.5,
@@ -378,6 +427,23 @@ impl From<BalanceTerms> for String {
     }
 }
 
+impl TryFrom<String> for PitchReference {
+    type Error = TaskConfigError;
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        Self::from_name(&name).ok_or_else(|| {
+            TaskConfigError(format!(
+                "pitch_reference must be \"world\" (the paper's) or \"ground\", got {name:?}"
+            ))
+        })
+    }
+}
+
+impl From<PitchReference> for String {
+    fn from(value: PitchReference) -> Self {
+        value.name().to_string()
+    }
+}
+
 impl TryFrom<String> for ActionPrior {
     type Error = TaskConfigError;
     fn try_from(name: String) -> Result<Self, Self::Error> {
@@ -414,6 +480,7 @@ mod tests {
             distance_reward: DistanceReward::NewGround,
             balance_terms: BalanceTerms::Penalty,
             action_prior: ActionPrior::ScriptedCrawl,
+            pitch_reference: PitchReference::Ground,
             observation: ObservationConfig {
                 foot_history_phases: 2,
                 goal_line_ahead_m: Some(1.0),
@@ -432,6 +499,7 @@ mod tests {
             "max_paid_progress_m",
             "foot_history_phases",
             "goal_line_ahead_m",
+            "pitch_reference",
         ] {
             assert!(!plain.contains(key), "{key} in {plain}");
         }
@@ -462,6 +530,10 @@ mod tests {
             (
                 "balance_terms = \"reward\"",
                 "balance_terms must be \"paper\"",
+            ),
+            (
+                "pitch_reference = \"slope\"",
+                "pitch_reference must be \"world\" (the paper's) or \"ground\", got \"slope\"",
             ),
             (
                 "distance_reward = \"backward\"",

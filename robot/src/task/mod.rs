@@ -115,7 +115,9 @@ mod observation;
 mod reward;
 mod termination;
 
-pub use config::{ActionPrior, BalanceTerms, DistanceReward, TaskConfig, TaskConfigError};
+pub use config::{
+    ActionPrior, BalanceTerms, DistanceReward, PitchReference, TaskConfig, TaskConfigError,
+};
 pub use observation::{FOOT_HISTORY_PHASES, ObservationConfig};
 pub use reward::RewardTerms;
 pub use termination::Termination;
@@ -844,6 +846,55 @@ mod tests {
             "{t:?} vs {expected}"
         );
         assert_eq!(block(&task, &obs, "phase"), &[0.25]);
+    }
+
+    #[test]
+    fn on_a_slope_the_pitch_is_judged_against_the_ground_when_asked() {
+        // The robot in the air above a 20-degree rigid slope, lying along it
+        // (nose up 20 degrees, heading +x, uphill).
+        for (spec, x_m, degrees) in [
+            ("slope:20", 1.0, 20.0),
+            ("varying:4m:5cm,(elastic:5cm:slope=20)", 5.0, 20.0),
+        ] {
+            let tan = f64::tan(f64::to_radians(degrees));
+            for (reference, expected_fall) in [
+                (PitchReference::World, true),
+                (PitchReference::Ground, false),
+            ] {
+                let mut task = task_on(
+                    spec,
+                    TaskConfig {
+                        pitch_reference: reference,
+                        ..TaskConfig::default()
+                    },
+                    0,
+                );
+                let ground_m = task.world().rest_height_m(x_m, 0.0);
+                let pose = Isometry3::new(
+                    Vector3::new(x_m, 0.0, ground_m + 0.6),
+                    Vector3::y() * -degrees.to_radians(),
+                );
+                let squat = task.world().squat_rad().to_vec();
+                task.world_mut().place_robot(&pose, &squat);
+                // the ground's pitch is the slope's, in the base pitch's sense
+                let ground_pitch = task.world().ground_pitch_rad();
+                assert!(
+                    (ground_pitch + tan.atan()).abs() < 1e-3,
+                    "{spec}: {}",
+                    ground_pitch.to_degrees()
+                );
+                let termination = task.check_termination(task.base_height_m());
+                assert_eq!(
+                    matches!(termination, Some(Termination::PitchTooLarge { .. })),
+                    expected_fall,
+                    "{spec} {reference:?}: {termination:?}"
+                );
+                assert!(expected_fall || termination.is_none(), "{termination:?}");
+            }
+        }
+        // level ground at rest: no inclination, tiles included
+        let task = task_on("elastic:5cm", TaskConfig::default(), 0);
+        assert_eq!(task.world().ground_pitch_rad(), 0.0);
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Why an episode ends early: base too low, pitch too large, a link other
 //! than a foot on the ground (checked after every physics step).
 
+use super::PitchReference;
 use super::Task;
 
 /// Why an episode ended early.
@@ -13,7 +14,7 @@ pub enum Termination {
     },
     /// |pitch| beyond the limit
     PitchTooLarge {
-        /// the pitch, degrees
+        /// the pitch, degrees (against the `pitch_reference`)
         pitch_deg: f64,
     },
     /// a link other than a foot touched the ground
@@ -52,6 +53,10 @@ impl Task {
             });
         }
         let (_, pitch, _) = self.world.base_pose().rotation.euler_angles();
+        let pitch = match self.config.pitch_reference {
+            PitchReference::World => pitch,
+            PitchReference::Ground => pitch - self.world.ground_pitch_rad(),
+        };
         if pitch.to_degrees().abs() > self.config.max_pitch_deg {
             return Some(Termination::PitchTooLarge {
                 pitch_deg: pitch.to_degrees(),

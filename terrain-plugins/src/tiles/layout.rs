@@ -64,6 +64,31 @@ pub struct TileSpring {
     pub damping_n_s_per_m: f64,
 }
 
+/// The rest top of a column of tiles on a hill: the chord of the region's
+/// hill over the column's cell, so that neighbouring tiles' tops meet at
+/// their cells' edges (on the hill's straight sides the chord is the hill
+/// itself; a cell across the crest is flat, the crest cut by
+/// tan(angle) x pitch / 2 at most).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TileRest {
+    /// the top's height at the column's centre, m
+    pub top_m: f64,
+    /// the top's rise along x, dz/dx (the tangent of its inclination)
+    pub slope: f64,
+}
+
+impl TileRest {
+    /// The rest top at `x_m` of a tile centred at `center_x_m`, m.
+    pub fn top_at_m(&self, x_m: f64, center_x_m: f64) -> f64 {
+        self.top_m + self.slope * (x_m - center_x_m)
+    }
+
+    /// The top's inclination, radians (positive: rising along +x).
+    pub fn angle_rad(&self) -> f64 {
+        self.slope.atan()
+    }
+}
+
 /// Where a field's regions, cells and springs lie.
 #[derive(Debug, Clone)]
 pub(super) struct FieldLayout {
@@ -77,6 +102,9 @@ pub(super) struct FieldLayout {
     pub cell_springs: Vec<Option<TileSpring>>,
     /// region index of each column
     pub column_region: Vec<usize>,
+    /// each column's rest top if its tiles lie on a hill (`None`: flat, at
+    /// z = 0, or no tiles)
+    pub column_rest: Vec<Option<TileRest>>,
     /// columns along x
     pub columns: usize,
     /// rows across
@@ -127,6 +155,7 @@ impl FieldLayout {
         let half = pitch / 2.0;
         let mut regions = Vec::new();
         let mut models = Vec::new();
+        let mut tile_hills = Vec::new();
         let half_width_m = rows as f64 * pitch / 2.0;
         let frictions: Vec<f64> = region_surfaces
             .iter()
@@ -136,6 +165,21 @@ impl FieldLayout {
             let first = column_region.iter().position(|&r| r == index).unwrap_or(0);
             let last = column_region.iter().rposition(|&r| r == index).unwrap_or(0);
             let x_range_m = (column_x(first) - half, column_x(last) + half);
+            // Tiles take the region's own slope, else the terrain's.
+            let tiled = matches!(
+                surface.ground,
+                Ground::Elastic { .. } | Ground::ElasticRange { .. } | Ground::Soil(_)
+            );
+            let field_slope = (params.slope_deg > 0.0).then_some(params.slope_deg);
+            let surface = &Surface {
+                slope_deg: surface.slope_deg.or(field_slope).filter(|_| tiled),
+                ..*surface
+            };
+            tile_hills.push(surface.slope_deg.map(|degrees| RegionRelief::Hill {
+                x_m: x_range_m,
+                y_m: (-half_width_m, half_width_m),
+                tan: degrees.to_radians().tan(),
+            }));
             let spring_at = |depth_m: f64| {
                 let k = TileParams::stiffness_n_per_m(depth_m, ctx);
                 (k, params.damping_n_s_per_m(k, ctx))
@@ -273,12 +317,30 @@ impl FieldLayout {
             }
         }
 
+        let column_rest = column_region
+            .iter()
+            .enumerate()
+            .map(|(ix, &r)| {
+                tile_hills[r].as_ref().map(|hill| {
+                    let (left_m, right_m) = (
+                        hill.height_m(column_x(ix) - half, 0.0),
+                        hill.height_m(column_x(ix) + half, 0.0),
+                    );
+                    TileRest {
+                        top_m: (left_m + right_m) / 2.0,
+                        slope: (right_m - left_m) / pitch,
+                    }
+                })
+            })
+            .collect();
+
         Self {
             regions,
             models,
             frictions,
             cell_springs,
             column_region,
+            column_rest,
             columns,
             rows,
             first_center_m: [first_x, first_y],
@@ -298,6 +360,7 @@ mod tests {
         Surface {
             ground: Ground::Elastic { depth_m },
             friction: None,
+            slope_deg: None,
         }
     }
 
@@ -380,6 +443,7 @@ mod tests {
                 max_depth_m: 0.05,
             },
             friction: None,
+            slope_deg: None,
         };
         let ctx = BuildContext::default();
         let field = FieldLayout::new(&params(), &RegionLayout::Uniform(range), &ctx);

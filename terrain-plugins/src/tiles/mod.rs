@@ -24,6 +24,20 @@
 //! they fall asleep again once still. (Rapier's first step of a new world
 //! wakes them all; `after_step` sends the untouched ones back to sleep.)
 //!
+//! Hills (`slope=<degrees>`): a tiled region may lie on a hill, rising at
+//! the angle from the region's start to its middle and falling to its end
+//! (as rigid `slope` regions). Each tile is the same box turned about y, its
+//! top face the chord of the hill over its cell, so neighbouring tops meet
+//! at the cells' edges. The springs stay vertical, with the same
+//! k = m g / (4 d): the load a standing robot puts on the ground is its
+//! weight, vertical on any incline, so the standing robot still sinks d
+//! (measured vertically) and `elastic:5cm` means the same sink on a slope as
+//! on flat ground; the downhill pull of gravity along the incline is held
+//! by friction at the feet and by the tiles' locked horizontal axes, as
+//! rigid ground holds it. (Springs along the incline's normal would carry
+//! m g cos(angle) and sink d cos(angle), and take a second axis of solver
+//! work per tile.) Sinks are measured along z.
+//!
 //! Layout: tile centres lie on multiples of the tile pitch (so a robot placed
 //! at a whole number of pitches stands with its feet near tile centres);
 //! columns run along x from `-back` to `length - back`, rows across a width
@@ -35,7 +49,7 @@ mod params;
 use rapier3d::prelude::*;
 
 use layout::{FieldLayout, RegionModel};
-pub use layout::{RegionLayout, TileSpring};
+pub use layout::{RegionLayout, TileRest, TileSpring};
 pub use params::{DEFAULT_LENGTH_M, TileParams, friction_decl, tile_param_decls};
 
 use crate::relief::RegionRelief;
@@ -128,8 +142,28 @@ impl TiledTerrain {
         &self.layout.cell_springs
     }
 
-    fn tile_sink_m(&self, world: &PhysicsWorld, handle: RigidBodyHandle) -> f64 {
-        let rest_center_z = -TILE_THICKNESS_M / 2.0;
+    /// Where the body of tile (ix, iy) rests: its box's centre, m. A flat
+    /// tile's box hangs from z = 0; a tile on a hill is the same box turned
+    /// about y by its rest top's inclination a, its top face's centre on the
+    /// rest top, so its centre lies thickness / 2 below that along the
+    /// face's normal (-sin a, 0, cos a).
+    fn tile_rest_center_m(&self, ix: usize, iy: usize) -> [f64; 3] {
+        let [cx, cy] = self.center_m(ix, iy);
+        let half_m = TILE_THICKNESS_M / 2.0;
+        match self.layout.column_rest[ix] {
+            None => [cx, cy, -half_m],
+            Some(rest) => {
+                let a = rest.angle_rad();
+                [cx + half_m * a.sin(), cy, rest.top_m - half_m * a.cos()]
+            }
+        }
+    }
+
+    /// How far tile `index` is pushed down from rest, m (along z: the tiles
+    /// move vertically on hills too).
+    fn tile_sink_m(&self, world: &PhysicsWorld, index: usize, handle: RigidBodyHandle) -> f64 {
+        let rest_center_z =
+            self.tile_rest_center_m(index / self.layout.rows, index % self.layout.rows)[2];
         world
             .bodies
             .get(handle)
@@ -155,11 +189,8 @@ impl TiledTerrain {
         let Some(body) = world.bodies.get_mut(handle) else {
             return;
         };
-        let [cx, cy] = self.center_m(index / self.layout.rows, index % self.layout.rows);
-        body.set_translation(
-            Vector::new(cx as f32, cy as f32, (-TILE_THICKNESS_M / 2.0) as f32),
-            false,
-        );
+        let [x, y, z] = self.tile_rest_center_m(index / self.layout.rows, index % self.layout.rows);
+        body.set_translation(Vector::new(x as f32, y as f32, z as f32), false);
         body.set_linvel(Vector::ZERO, false);
         body.set_angvel(Vector::ZERO, false);
         body.sleep();
@@ -179,8 +210,12 @@ impl TiledTerrain {
     }
 
     /// The unloaded height of the ground at (x, y) in column `ix`: a relief
-    /// region's, else the tiles' and rigid blocks' top, z = 0, m.
+    /// region's, tiles on a hill their rest top's, else the tiles' and rigid
+    /// blocks' top, z = 0, m.
     fn resting_top_m(&self, ix: usize, x_m: f64, y_m: f64) -> f64 {
+        if let Some(rest) = self.layout.column_rest[ix] {
+            return rest.top_at_m(x_m, self.center_m(ix, 0)[0]);
+        }
         self.relief(self.layout.column_region[ix])
             .map_or(0.0, |relief| relief.height_m(x_m, y_m))
     }
@@ -268,8 +303,8 @@ impl Terrain for TiledTerrain {
                     self.tiles.push(None);
                     continue;
                 };
-                let [cx, cy] = self.center_m(ix, iy);
-                let rest = Vector::new(cx as f32, cy as f32, (-TILE_THICKNESS_M / 2.0) as f32);
+                let [x, y, z] = self.tile_rest_center_m(ix, iy);
+                let rest = Vector::new(x as f32, y as f32, z as f32);
                 let body = RigidBodyBuilder::dynamic()
                     .translation(rest)
                     .sleeping(true)
@@ -279,11 +314,24 @@ impl Terrain for TiledTerrain {
                             | LockedAxes::ROTATION_LOCKED,
                     );
                 let handle = world.insert_body(body);
-                let collider = ColliderBuilder::cuboid(
-                    (side / 2.0) as f32,
-                    (side / 2.0) as f32,
-                    (TILE_THICKNESS_M / 2.0) as f32,
-                )
+                let collider = match self.layout.column_rest[ix] {
+                    None => ColliderBuilder::cuboid(
+                        (side / 2.0) as f32,
+                        (side / 2.0) as f32,
+                        (TILE_THICKNESS_M / 2.0) as f32,
+                    ),
+                    // On a hill: the box turned about y, as long along its
+                    // top as its cell's side is wide over the ground.
+                    Some(rest) => {
+                        let a = rest.angle_rad();
+                        ColliderBuilder::cuboid(
+                            (side / 2.0 / a.cos()) as f32,
+                            (side / 2.0) as f32,
+                            (TILE_THICKNESS_M / 2.0) as f32,
+                        )
+                        .rotation(Vector::new(0.0, -a as f32, 0.0))
+                    }
+                }
                 .mass(p.tile_mass_kg as f32);
                 let friction = self.layout.frictions[self.layout.column_region[ix]];
                 world.insert_collider(terrain_collider(collider, friction), Some(handle));
@@ -330,8 +378,11 @@ impl Terrain for TiledTerrain {
             return;
         }
         self.stepped = true;
-        for tile in self.tiles.iter().flatten() {
-            let sink_m = self.tile_sink_m(world, tile.body);
+        for (index, tile) in self.tiles.iter().enumerate() {
+            let Some(tile) = tile else {
+                continue;
+            };
+            let sink_m = self.tile_sink_m(world, index, tile.body);
             let Some(body) = world.bodies.get_mut(tile.body) else {
                 continue;
             };
@@ -367,7 +418,7 @@ impl Terrain for TiledTerrain {
             if body.is_sleeping() && !recovering {
                 continue;
             }
-            let sink_m = self.tile_sink_m(world, tile.body);
+            let sink_m = self.tile_sink_m(world, index, tile.body);
             let advanced_m = model.advance(plastic_m, sink_m, dt_secs);
             if advanced_m == plastic_m {
                 continue;
@@ -427,7 +478,13 @@ impl Terrain for TiledTerrain {
                 .copied()
                 .flatten()
             {
-                Some(tile) => -self.tile_sink_m(world, tile.body),
+                Some(tile) => {
+                    let sink_m = self.tile_sink_m(world, ix * self.layout.rows + iy, tile.body);
+                    match self.layout.column_rest[ix] {
+                        None => -sink_m,
+                        Some(rest) => rest.top_at_m(x_m, self.center_m(ix, iy)[0]) - sink_m,
+                    }
+                }
                 None => self.resting_top_m(ix, x_m, y_m),
             },
         }
@@ -475,19 +532,18 @@ impl Terrain for TiledTerrain {
         );
         for ix in xs {
             for iy in ys.clone() {
-                let sink_m = match self
-                    .tiles
-                    .get(ix * self.layout.rows + iy)
-                    .copied()
-                    .flatten()
-                {
-                    Some(tile) => self.tile_sink_m(world, tile.body),
+                let index = ix * self.layout.rows + iy;
+                let sink_m = match self.tiles.get(index).copied().flatten() {
+                    Some(tile) => self.tile_sink_m(world, index, tile.body),
                     None => 0.0,
                 };
+                let center_m = self.center_m(ix, iy);
                 out.push(TileState {
-                    center_m: self.center_m(ix, iy),
+                    center_m,
                     side_m: p - self.params.gap_m,
                     sink_m,
+                    rest_top_m: self.resting_top_m(ix, center_m[0], center_m[1]),
+                    rest_slope: self.layout.column_rest[ix].map_or(0.0, |rest| rest.slope),
                     region: self.layout.column_region[ix],
                 });
             }
@@ -534,6 +590,19 @@ impl Terrain for TiledTerrain {
         let mut lines = Vec::new();
         for (region, model) in self.layout.regions.iter().zip(&self.layout.models) {
             let in_region = |ix: usize| self.layout.column_region[ix] == region.index;
+            let crest = (0..self.layout.columns)
+                .filter(|&ix| in_region(ix))
+                .filter_map(|ix| self.layout.column_rest[ix].map(|rest| (rest.top_m, ix)))
+                .max_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((top_m, ix)) = crest {
+                lines.push(format!(
+                    "region {} ({}): tiles on a hill, their tops {:.1} cm high at x = {:.2} m (springs vertical)",
+                    region.index,
+                    region.label,
+                    top_m * 100.0,
+                    self.center_m(ix, 0)[0]
+                ));
+            }
             match model {
                 RegionModel::ElasticRange { .. } => {
                     let depths: Vec<f64> = (0..self.layout.columns)

@@ -26,6 +26,20 @@ pub fn friction_decl() -> ParamDecl {
     )
 }
 
+/// The optional `slope` parameter of every tiled terrain and of each tiled
+/// region of `varying` (see [`super`]: a hill of tiles on vertical springs).
+pub fn slope_decl() -> ParamDecl {
+    ParamDecl::optional(
+        "slope",
+        ParamKind::Number,
+        ParamValue::Number(0.0),
+        "inclination of the tiles' rest surface, degrees: a hill rising at this angle to the region's middle and falling to its end, default 0 (flat)",
+    )
+}
+
+/// The steepest slope a tiled surface may have, degrees (as rigid `slope`).
+pub const MAX_SLOPE_DEG: f64 = 45.0;
+
 /// The optional parameters every tiled terrain takes, with their defaults.
 pub fn tile_param_decls() -> Vec<ParamDecl> {
     use ParamKind::*;
@@ -62,6 +76,7 @@ pub fn tile_param_decls() -> Vec<ParamDecl> {
             "mass of one tile, default 0.5kg",
         ),
         friction_decl(),
+        slope_decl(),
         ParamDecl::optional(
             "length",
             Length,
@@ -98,6 +113,8 @@ pub struct TileParams {
     pub tile_mass_kg: f64,
     /// friction coefficient of the tiles and the ground
     pub friction: f64,
+    /// inclination of the tiles' rest surface, degrees (0: flat)
+    pub slope_deg: f64,
     /// extent along x, m
     pub length_m: f64,
     /// extent behind x = 0, m
@@ -116,14 +133,27 @@ impl TileParams {
             damping_ratio: spec.number("damping"),
             tile_mass_kg: spec.mass_kg("tile_mass"),
             friction: spec.number("friction"),
+            slope_deg: spec.number("slope"),
             length_m: spec.length_m("length"),
             back_m: spec.length_m("back"),
             width_m: spec.length_m("width"),
         }
     }
 
-    /// Checks the relations between the parameters and the given depths.
-    pub fn validate(&self, depths_m: impl IntoIterator<Item = f64>) -> Result<(), String> {
+    /// Checks the relations between the parameters and the given depths and
+    /// slopes (degrees; the terrain's own is checked too).
+    pub fn validate(
+        &self,
+        depths_m: impl IntoIterator<Item = f64>,
+        slopes_deg: impl IntoIterator<Item = f64>,
+    ) -> Result<(), String> {
+        for degrees in std::iter::once(self.slope_deg).chain(slopes_deg) {
+            if degrees >= MAX_SLOPE_DEG {
+                return Err(format!(
+                    "a slope of {degrees} degrees is too steep for tiles (below {MAX_SLOPE_DEG})"
+                ));
+            }
+        }
         if self.gap_m >= self.pitch_m {
             return Err(format!(
                 "gap {} must be smaller than the tile pitch {}",
@@ -185,6 +215,7 @@ pub(super) fn default_params() -> TileParams {
         damping_ratio: 0.5,
         tile_mass_kg: 0.5,
         friction: 1.0,
+        slope_deg: 0.0,
         length_m: 40.0,
         back_m: 2.0,
         width_m: 3.0,
@@ -213,7 +244,7 @@ mod tests {
 
     #[test]
     fn relations_between_parameters_are_checked_with_the_values_named() {
-        assert_eq!(params().validate([0.05]), Ok(()));
+        assert_eq!(params().validate([0.05], []), Ok(()));
         let cases = [
             (
                 TileParams {
@@ -246,10 +277,10 @@ mod tests {
             ),
         ];
         for (p, expected) in cases {
-            let err = p.validate([0.05]).unwrap_err();
+            let err = p.validate([0.05], []).unwrap_err();
             assert!(err.contains(expected), "{err}");
         }
-        let err = params().validate([0.05, 0.2]).unwrap_err();
+        let err = params().validate([0.05, 0.2], []).unwrap_err();
         assert!(
             err.contains("depth 20cm is beyond the tile travel 15cm"),
             "{err}"

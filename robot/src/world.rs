@@ -101,6 +101,8 @@ pub struct World {
     limits_rad: Vec<(f64, f64)>,
     squat_rad: Vec<f64>,
     time_secs: f64,
+    /// `time_secs` at the terrain's last reset
+    terrain_reset_secs: f64,
     steps: u64,
 }
 
@@ -142,6 +144,7 @@ impl World {
             torques_n_m: vec![0.0; n],
             squat_rad,
             time_secs: 0.0,
+            terrain_reset_secs: 0.0,
             steps: 0,
         };
         world.reset_robot(start_xy_m, 0.0);
@@ -222,9 +225,17 @@ impl World {
         self.torques_n_m.fill(0.0);
     }
 
-    /// Puts the terrain's moving parts back at rest.
+    /// Puts the terrain's moving parts back at rest (and its clock, for a
+    /// terrain that changes by itself, at zero).
     pub fn reset_terrain(&mut self) {
         self.terrain.reset(&mut self.physics);
+        self.terrain_reset_secs = self.time_secs;
+    }
+
+    /// Simulated time since the terrain's last reset (the world's making
+    /// if none), s: the clock of [`terrain_plugins::Terrain::change_times_secs`].
+    pub fn secs_since_terrain_reset(&self) -> f64 {
+        self.time_secs - self.terrain_reset_secs
     }
 
     /// Sets the PD position targets (joint order), clamped to the limits; a

@@ -21,6 +21,7 @@ pub mod relief;
 pub mod rigid;
 pub mod soil;
 pub mod spec;
+pub mod switch;
 pub mod tiles;
 pub mod units;
 pub mod varying;
@@ -219,6 +220,12 @@ pub trait Terrain: Send {
     /// ground; tiles are drawn from [`Terrain::tiles_in`]).
     fn ground_mesh(&self) -> Option<GroundMesh> {
         None
+    }
+    /// Times after each [`Terrain::reset`] at which the terrain changes by
+    /// itself, s, in order (the `switch` terrain's springs): `quadwalk
+    /// eval` measures how the robot responds to the first. Default: none.
+    fn change_times_secs(&self) -> Vec<f64> {
+        Vec::new()
     }
     /// Lines `quadwalk terrain show` prints after the regions: what else a
     /// user should know about this terrain's model (e.g. a load-sink

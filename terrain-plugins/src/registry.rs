@@ -54,7 +54,7 @@ impl Registry {
     }
 
     /// A registry with the built-in plugins: `rigid`, `elastic`, `varying`,
-    /// `soil`, `slope`, `steps`, `rough`.
+    /// `soil`, `switch`, `slope`, `steps`, `rough`.
     pub fn builtin() -> Self {
         let mut registry = Self::empty();
         for plugin in [
@@ -62,6 +62,7 @@ impl Registry {
             Box::new(crate::elastic::ElasticPlugin),
             Box::new(crate::varying::VaryingPlugin),
             Box::new(crate::soil::SoilPlugin),
+            Box::new(crate::switch::SwitchPlugin),
             Box::new(crate::relief::SlopePlugin),
             Box::new(crate::relief::StepsPlugin),
             Box::new(crate::relief::RoughPlugin),

@@ -128,7 +128,7 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ("", "empty"),
         (
             "sand:5cm",
-            "unknown terrain \"sand\" (known terrains: rigid, elastic, varying, soil, slope, steps, rough)",
+            "unknown terrain \"sand\" (known terrains: rigid, elastic, varying, soil, switch, slope, steps, rough)",
         ),
         ("elastic", "takes 1 positional argument(s), got 0"),
         ("elastic:5cm:3cm", "takes 1 positional argument(s), got 2"),
@@ -192,6 +192,12 @@ fn errors_keep_the_input_and_say_what_is_wrong() {
         ("varying:2m:5cm,(soil:30cm)", "beyond the tile travel"),
         ("varying:2m:(rigid:friction=-1)", "must not be negative"),
         ("slope:50", "too steep"),
+        ("elastic:5cm:slope=45", "too steep for tiles (below 45)"),
+        (
+            "varying:4m:5cm,(elastic:5cm:slope=60)",
+            "too steep for tiles",
+        ),
+        ("switch:2cm:5cm", "takes 3 positional argument"),
         ("slope:-5", "must not be negative"),
         ("steps:40cm:1m", "at most 30cm"),
         ("steps:5cm:5cm", "shorter than 10cm"),
@@ -438,6 +444,59 @@ fn a_tile_reset_while_loaded_rests_and_still_carries_load() {
         terrain.reset(&mut world);
         assert!(terrain.surface_height_m(&world, 0.0, 0.0).abs() < 1e-6);
         assert!(world.bodies[handle].is_sleeping());
+    }
+}
+
+#[test]
+fn switch_tiles_take_the_new_spring_at_their_time_and_the_old_one_after_a_reset() {
+    // 2 cm tiles that switch to the spring of 5 cm after 1 s: a tile under a
+    // quarter of the standing robot sinks 2 cm, then 5 cm; a reset brings
+    // the 2 cm spring back, every round.
+    let (mut world, mut terrain) = world_with("switch:2cm:5cm:1", 0);
+    assert_eq!(terrain.spec().to_string(), "switch:2cm:5cm:1");
+    let (k2, k5) = (
+        STANDING_LOAD_N / 0.02,
+        terrain.regions()[0].stiffness_n_per_m.unwrap() * 0.02 / 0.05,
+    );
+    assert!((terrain.regions()[0].stiffness_n_per_m.unwrap() - k2).abs() < 1e-9 * k2);
+    assert!(
+        terrain
+            .details()
+            .iter()
+            .any(|l| l.contains("5cm") && l.contains(&format!("{k5:.1}"))),
+        "{:?}",
+        terrain.details()
+    );
+    for round in 0..2 {
+        // 0.83 s: before the switch
+        let before = press(&mut world, &mut terrain, STANDING_LOAD_N, 200);
+        assert!((before - 0.02).abs() < 0.001, "round {round}: {before}");
+        // 1.83 s: after it (damping ratio 0.5 settles within 0.6 s)
+        let after = press(&mut world, &mut terrain, STANDING_LOAD_N, 240);
+        assert!((after - 0.05).abs() < 0.002, "round {round}: {after}");
+        // an unloaded tile stays at rest through the switch
+        assert!(terrain.surface_height_m(&world, 1.0, 0.0).abs() < 1e-6);
+        let handle = centre_tile(&world);
+        world.bodies[handle].reset_forces(true);
+        terrain.reset(&mut world);
+        assert!(terrain.surface_height_m(&world, 0.0, 0.0).abs() < 1e-6);
+    }
+    for (spec, expected) in [
+        (
+            "switch:2cm:5cm:0",
+            "at = 0 must be a positive number of seconds",
+        ),
+        (
+            "switch:2cm:20cm:3",
+            "depth 20cm is beyond the tile travel 15cm",
+        ),
+    ] {
+        let err = Registry::builtin()
+            .create(spec, &BuildContext::default())
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(err.contains(expected), "{spec}: {err}");
     }
 }
 

@@ -38,6 +38,55 @@ fn assert_episodes_are_rollouts(eval: &Value, policy: &str, scene: &[&str], phas
 }
 
 #[test]
+fn eval_measures_the_response_to_a_terrain_that_changes_under_the_robot() {
+    // The crawl on tiles that soften from 2 to 5 cm 4 s after each reset
+    // (a third into the 5th phase), and that stiffen the other way: the
+    // base settles lower, then higher (by ~1.5 cm: the crawl holds its hip
+    // height above the sunk tiles, so it makes up half of the 3 cm).
+    for (spec, lower) in [("switch:2cm:5cm:4", true), ("switch:5cm:2cm:4", false)] {
+        let out = scratch_dir("eval-switch");
+        let args = [
+            "--policy",
+            "scripted",
+            "--terrain",
+            spec,
+            "--episodes",
+            "2",
+            "--phases",
+            "18",
+            "--threads",
+            "2",
+        ];
+        let e = eval_json(&args, &out);
+        let r = &e["summary"]["change_response"];
+        assert_eq!(r["at_secs"], 4.0, "{r}");
+        assert_eq!(r["episodes"], 2, "{r}");
+        let change_m = r["level_change_m"]["mean"].as_f64().unwrap();
+        let sign = if lower { -1.0 } else { 1.0 };
+        assert!((0.008..0.04).contains(&(sign * change_m)), "{spec}: {r}");
+        for episode in e["episodes"].as_array().unwrap() {
+            let own = &episode["change_response"];
+            assert!(own["recovery_secs"].as_f64().unwrap() >= 0.0, "{own}");
+            assert!(own["excess_dip_m"].is_f64(), "{own}");
+        }
+    }
+    // a terrain that does not change has no response in its report
+    let out = scratch_dir("eval-no-switch");
+    let e = eval_json(
+        &[
+            "--terrain",
+            "elastic:2cm",
+            "--episodes",
+            "1",
+            "--phases",
+            "2",
+        ],
+        &out,
+    );
+    assert!(e["summary"].get("change_response").is_none(), "{e}");
+}
+
+#[test]
 fn eval_episodes_are_the_rollouts_of_their_seeds_and_its_files_are_written() {
     let out = scratch_dir("eval-crawl");
     let scene = ["--terrain", "varying:1m:2,5cm,rigid"];

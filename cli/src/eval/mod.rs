@@ -335,6 +335,19 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
             record::terrain_end_advice(report.max_phases)
         );
     }
+    if let Some(r) = &s.change_response {
+        out!(
+            "response        to the terrain's change at {} s: {} episodes walked from 3 s before to 6 s after it ({} fell or ended first); base level change mean {:+.2} cm; excess dip mean {:.2} cm (max {:.2}); recovery mean {:.2} s (max {:.2})",
+            r.at_secs,
+            r.episodes,
+            r.without,
+            100.0 * r.level_change_m.mean,
+            100.0 * r.excess_dip_m.mean,
+            100.0 * r.excess_dip_m.max,
+            r.recovery_secs.mean,
+            r.recovery_secs.max
+        );
+    }
     out!("per terrain type");
     out!(
         "  {:<22} {:>7} {:>10} {:>9} {:>11}",

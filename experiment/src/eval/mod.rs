@@ -9,6 +9,7 @@
 //! the same actions.
 
 pub mod record;
+pub mod response;
 pub mod summary;
 pub mod table1;
 

@@ -37,6 +37,8 @@ use robot::snapshot::{PhaseObserver, PhaseStart};
 use robot::task::{PhaseOutcome, SWING_ORDER, Task};
 use serde::{Deserialize, Serialize};
 
+use super::response::{ChangeResponse, ResponseTrace};
+
 /// Bins of the phase angle over the four-phase cycle (1 degree each).
 pub const ANGLE_BINS: usize = 360;
 
@@ -269,6 +271,13 @@ pub struct EpisodeRecord {
     pub robot_weight_n: f64,
     /// the episode's return
     pub reward_total: f64,
+    /// on a terrain that changes by itself: when, s after its reset
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub terrain_change_secs: Option<f64>,
+    /// and the robot's response to it (`None` if it fell or the episode
+    /// ended before the response's window did)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub change_response: Option<ChangeResponse>,
     /// every phase
     pub phase_log: Vec<PhaseRecord>,
     /// the samples of each terrain type this episode walked on (in memory
@@ -297,6 +306,9 @@ pub struct EpisodeRecorder {
     foot_slip_m: f64,
     /// the robot's mass, kg (read in the first step)
     mass_kg: f64,
+    /// on a terrain that changes by itself: the base heights around the
+    /// first change
+    response: Option<ResponseTrace>,
 }
 
 impl EpisodeRecorder {
@@ -342,6 +354,11 @@ impl EpisodeRecorder {
             foot_slip_m: self.foot_slip_m,
             robot_weight_n: weight_n,
             reward_total,
+            terrain_change_secs: self.response.as_ref().map(|t| t.at_secs),
+            change_response: self
+                .response
+                .as_ref()
+                .and_then(|t| t.response(robot::DT_SECS)),
             phase_log: self.phase_log,
             by_terrain: self.by_terrain,
         }
@@ -383,6 +400,19 @@ impl PhaseObserver for EpisodeRecorder {
         self.mechanical_energy_j += power_w * robot::DT_SECS;
         if self.mass_kg == 0.0 {
             self.mass_kg = world.model().total_mass_kg();
+            self.response = world
+                .terrain()
+                .change_times_secs()
+                .first()
+                .map(|&at| ResponseTrace::new(at));
+        }
+        if let Some(trace) = &mut self.response {
+            // the base above the ground at rest below it (see `response`)
+            let base = world.base_pose().translation.vector;
+            trace.add(
+                world.secs_since_terrain_reset(),
+                base.z - world.rest_height_m(base.x, base.y),
+            );
         }
         let touching = world.feet_touching_ground();
         for (sole, _) in world

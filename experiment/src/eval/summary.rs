@@ -8,6 +8,7 @@ use robot::model::LegName;
 use serde::{Deserialize, Serialize};
 
 use super::record::{ANGLE_BINS, Accumulator, EpisodeRecord, TerrainSamples};
+use super::response::ResponseSummary;
 
 /// The label of the column that pools every terrain type (the paper's
 /// T^ave).
@@ -204,6 +205,10 @@ pub struct Summary {
     pub falls_after_a_goal_by_goal_ahead: [usize; 4],
     /// every terrain type pooled ([`ALL_TERRAIN`]), then each type by label
     pub terrain_types: Vec<TerrainSummary>,
+    /// on a terrain that changes by itself (`switch`): the responses to the
+    /// change (see [`super::response`])
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub change_response: Option<ResponseSummary>,
 }
 
 impl Summary {
@@ -264,6 +269,13 @@ impl Summary {
             falls_at_terrain_end,
             falls_after_a_goal_by_goal_ahead,
             terrain_types,
+            change_response: ResponseSummary::of(
+                episodes.iter().find_map(|e| e.terrain_change_secs),
+                &episodes
+                    .iter()
+                    .map(|e| e.change_response)
+                    .collect::<Vec<_>>(),
+            ),
         }
     }
 
@@ -365,6 +377,8 @@ mod tests {
             foot_slip_m: 0.0,
             robot_weight_n: 0.0,
             reward_total: 0.0,
+            terrain_change_secs: None,
+            change_response: None,
             phase_log: terrains
                 .iter()
                 .map(|t| PhaseRecord {

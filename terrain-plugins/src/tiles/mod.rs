@@ -55,6 +55,7 @@ pub use params::{DEFAULT_LENGTH_M, TileParams, friction_decl, tile_param_decls};
 use crate::relief::RegionRelief;
 use crate::soil::SoilModel;
 use crate::spec::TerrainSpec;
+use crate::switch::StiffnessSwitch;
 use crate::{BuildContext, GroundMesh, Rect, Region, Terrain, TileState, terrain_collider};
 
 /// Thickness of a tile, metres.
@@ -92,6 +93,12 @@ pub struct TiledTerrain {
     built: bool,
     /// the world has taken its first step (see [`Terrain::after_step`])
     stepped: bool,
+    /// `switch`: when every spring changes, and to what
+    switch: Option<StiffnessSwitch>,
+    /// simulated time since the last reset, s (kept only with a switch)
+    elapsed_secs: f64,
+    /// the springs have switched since the last reset
+    switched: bool,
 }
 
 impl TiledTerrain {
@@ -112,6 +119,42 @@ impl TiledTerrain {
             soil_tiles: Vec::new(),
             built: false,
             stepped: false,
+            switch: None,
+            elapsed_secs: 0.0,
+            switched: false,
+        }
+    }
+
+    /// The same field, whose springs all switch as `switch` says after
+    /// each reset (the `switch` terrain).
+    pub fn with_switch(mut self, switch: StiffnessSwitch) -> Self {
+        self.switch = Some(switch);
+        self
+    }
+
+    /// Gives every tile `spring` (`None`: its own from the layout), with the
+    /// preload that holds the tile's weight at its rest position. Sleeping
+    /// tiles stay asleep: unloaded, they rest where they are under either
+    /// spring.
+    fn set_springs(&mut self, world: &mut PhysicsWorld, spring: Option<TileSpring>) {
+        let g = self.ctx.gravity_m_per_s2;
+        for (index, tile) in self.tiles.iter_mut().enumerate() {
+            let Some(tile) = tile else {
+                continue;
+            };
+            let Some(s) = spring.or(self.layout.cell_springs[index]) else {
+                continue;
+            };
+            tile.spring = s;
+            tile.preload_m = self.params.tile_mass_kg * g / s.stiffness_n_per_m;
+            if let Some(joint) = world.impulse_joints.get_mut(tile.joint, false) {
+                joint.data.set_motor_position(
+                    JointAxis::LinX,
+                    tile.preload_m as f32,
+                    s.stiffness_n_per_m as f32,
+                    s.damping_n_s_per_m as f32,
+                );
+            }
         }
     }
 
@@ -404,6 +447,21 @@ impl Terrain for TiledTerrain {
     /// rest point) with the sink it has now (see [`crate::soil`]); with
     /// recovery, a sleeping tile with a permanent sink is woken to rise.
     fn before_step(&mut self, world: &mut PhysicsWorld, dt_secs: f64) {
+        if let Some(switch) = self.switch
+            && !self.switched
+        {
+            if self.elapsed_secs >= switch.at_secs {
+                let k = TileParams::stiffness_n_per_m(switch.depth_m, &self.ctx);
+                let spring = TileSpring {
+                    depth_m: switch.depth_m,
+                    stiffness_n_per_m: k,
+                    damping_n_s_per_m: self.params.damping_n_s_per_m(k, &self.ctx),
+                };
+                self.set_springs(world, Some(spring));
+                self.switched = true;
+            }
+            self.elapsed_secs += dt_secs;
+        }
         for &index in &self.soil_tiles {
             let Some(tile) = self.tiles[index] else {
                 continue;
@@ -447,6 +505,11 @@ impl Terrain for TiledTerrain {
     }
 
     fn reset(&mut self, world: &mut PhysicsWorld) {
+        if self.switched {
+            self.set_springs(world, None);
+            self.switched = false;
+        }
+        self.elapsed_secs = 0.0;
         for index in 0..self.tiles.len() {
             let Some(tile) = self.tiles[index] else {
                 continue;
@@ -562,6 +625,10 @@ impl Terrain for TiledTerrain {
         }
     }
 
+    fn change_times_secs(&self) -> Vec<f64> {
+        self.switch.iter().map(|s| s.at_secs).collect()
+    }
+
     fn tile_count(&self) -> usize {
         self.layout.cell_springs.iter().flatten().count()
     }
@@ -588,6 +655,16 @@ impl Terrain for TiledTerrain {
     /// loading, and the permanent sink once unloaded.
     fn details(&self) -> Vec<String> {
         let mut lines = Vec::new();
+        if let Some(switch) = self.switch {
+            let k = TileParams::stiffness_n_per_m(switch.depth_m, &self.ctx);
+            lines.push(format!(
+                "every tile switches to the spring of {} ({:.1} N/m, damping {:.1} N s/m) {} s after each reset",
+                crate::units::format_length(switch.depth_m),
+                k,
+                self.params.damping_n_s_per_m(k, &self.ctx),
+                switch.at_secs
+            ));
+        }
         for (region, model) in self.layout.regions.iter().zip(&self.layout.models) {
             let in_region = |ix: usize| self.layout.column_region[ix] == region.index;
             let crest = (0..self.layout.columns)

@@ -424,6 +424,20 @@ impl PhaseController {
     /// stance feet hold their phase-start world positions, each solved by IK
     /// in the target base frame.
     pub fn joint_targets(&self, plan: &PhasePlan, sample: usize, targets_rad: &mut [f64]) -> usize {
+        self.joint_targets_moved(plan, sample, None, targets_rad)
+    }
+
+    /// [`Self::joint_targets`] with each foot's target moved by
+    /// `foot_offsets_m` (leg order, in the target base frame of this
+    /// sample) before IK: a lower-level controller's correction of the
+    /// plan within the phase. `None` is the plan itself.
+    pub fn joint_targets_moved(
+        &self,
+        plan: &PhasePlan,
+        sample: usize,
+        foot_offsets_m: Option<&[Vector3<f64>; 4]>,
+        targets_rad: &mut [f64],
+    ) -> usize {
         let t = sample as f64 / SAMPLES_PER_PHASE as f64;
         let curves = &plan.curves;
         let rpy = curves.base_orientation.at(t);
@@ -440,7 +454,10 @@ impl PhaseController {
             } else {
                 Point3::from(plan.feet_world_start_m[kin.name.index()])
             };
-            let foot_in_target = world_from_target_inv * foot_world;
+            let mut foot_in_target = world_from_target_inv * foot_world;
+            if let Some(offsets) = foot_offsets_m {
+                foot_in_target += offsets[kin.name.index()];
+            }
             let solution = kin.inverse(foot_in_target.coords);
             clamped += solution.clamped as usize;
             for (k, &j) in joints.iter().enumerate() {

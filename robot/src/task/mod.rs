@@ -112,6 +112,7 @@
 
 mod config;
 mod observation;
+mod phase;
 mod reward;
 mod termination;
 
@@ -119,6 +120,7 @@ pub use config::{
     ActionPrior, BalanceTerms, DistanceReward, PitchReference, TaskConfig, TaskConfigError,
 };
 pub use observation::{FOOT_HISTORY_PHASES, ObservationConfig};
+pub use phase::PhaseRun;
 pub use reward::RewardTerms;
 pub use termination::Termination;
 
@@ -126,10 +128,10 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::action::{ACTION_SIZE, SAMPLES_PER_PHASE};
+use crate::action::ACTION_SIZE;
 use crate::controller::{PhaseController, RobotState, feet_in_base_m, point_in_base};
 use crate::model::LegName;
-use crate::snapshot::{NoObserver, PhaseObserver, PhaseStart, StepSnapshot};
+use crate::snapshot::StepSnapshot;
 use crate::world::{DT_SECS, World};
 
 /// Swing order of the four phases of a cycle.
@@ -352,133 +354,6 @@ impl Task {
         self.controller.swing_leg()
     }
 
-    /// Runs one phase with `action` (27 values, clipped to [-1, 1]) and
-    /// writes the next observation into `obs`.
-    pub fn step_phase(&mut self, action: &[f32], obs: &mut [f32]) -> PhaseOutcome {
-        self.step_phase_observed(action, obs, &mut NoObserver)
-    }
-
-    /// [`Self::step_phase`], telling `observer` about the phase's curves,
-    /// every physics step and the outcome (for loggers and viewers).
-    pub fn step_phase_observed(
-        &mut self,
-        action: &[f32],
-        obs: &mut [f32],
-        observer: &mut dyn PhaseObserver,
-    ) -> PhaseOutcome {
-        assert!(!self.episode.done, "reset the task after an episode ends");
-        let plan = self
-            .controller
-            .plan_phase(action, &RobotState::of_world(&self.world));
-        let goal_distance_prev = self.goal_in_base().norm();
-        observer.phase_started(
-            self,
-            &PhaseStart {
-                phase: plan.phase,
-                sim_time_s: self.world.time_secs(),
-                swing_leg: plan.swing_leg,
-                base_start: plan.base_start,
-                curves: plan.curves,
-            },
-        );
-
-        let mut targets = self.world.joint_targets_rad().to_vec();
-        let (mut torque_norm_sum, mut height_sum, mut ik_clamped, mut steps) =
-            (0.0, 0.0, 0usize, 0usize);
-        let mut height_range = (f64::INFINITY, f64::NEG_INFINITY);
-        let mut termination = None;
-        for i in 1..=SAMPLES_PER_PHASE {
-            ik_clamped += self.controller.joint_targets(&plan, i, &mut targets);
-            self.world.set_joint_targets_rad(&targets);
-            self.controller.record_step(self.feet_in_base());
-            self.world.step();
-            steps += 1;
-            torque_norm_sum += self
-                .world
-                .applied_torques_n_m()
-                .iter()
-                .map(|t| t * t)
-                .sum::<f64>()
-                .sqrt();
-            let height = self.base_height_m();
-            height_sum += height;
-            height_range = (height_range.0.min(height), height_range.1.max(height));
-            termination = self.check_termination(height);
-            observer.stepped(self, i);
-            if termination.is_some() {
-                break;
-            }
-        }
-        self.controller.end_phase(&plan);
-
-        let mean_base_height_m = height_sum / steps as f64;
-        let (reward, terms, goals_reached) = if termination.is_some() {
-            (self.config.termination_reward, RewardTerms::default(), 0)
-        } else {
-            let rho = self.goal_in_base();
-            let (roll, _, _) = self.world.base_pose().rotation.euler_angles();
-            let terms = RewardTerms {
-                distance: match self.config.distance_reward {
-                    DistanceReward::Progress => {
-                        RewardTerms::distance_term(goal_distance_prev, rho.norm())
-                    }
-                    DistanceReward::NewGround => RewardTerms::new_ground_term(
-                        self.episode.closest_goal_distance_m,
-                        goal_distance_prev,
-                        rho.norm(),
-                        self.config.max_paid_progress_m.unwrap_or(f64::INFINITY),
-                    ),
-                    DistanceReward::Forward => RewardTerms::forward_term(
-                        goal_distance_prev,
-                        rho.norm(),
-                        self.config.forward_reward_per_m,
-                    ),
-                    DistanceReward::Tracking => RewardTerms::tracking_term(
-                        goal_distance_prev - rho.norm(),
-                        self.config.target_progress_m,
-                    ),
-                },
-                orientation: {
-                    let heading = self.heading_target_in_base();
-                    RewardTerms::orientation_term(heading.y.atan2(heading.x))
-                },
-                height: RewardTerms::height_term(self.base_height_m()),
-                torque: RewardTerms::torque_term(torque_norm_sum / steps as f64),
-                roll: RewardTerms::roll_term(roll),
-            }
-            .with_balance(self.config.balance_terms);
-            let goals = self.advance_goals();
-            // The closest approach to the goal now ahead (a new goal starts afresh).
-            let now = self.goal_in_base().norm();
-            self.episode.closest_goal_distance_m = if goals > 0 {
-                now
-            } else {
-                self.episode.closest_goal_distance_m.min(now)
-            };
-            (terms.total(), terms, goals)
-        };
-        let truncated = termination.is_none() && self.phase() >= self.config.max_phases;
-        self.episode.done = termination.is_some() || truncated;
-        self.observe(obs);
-        let outcome = PhaseOutcome {
-            reward,
-            terms,
-            termination,
-            truncated,
-            steps,
-            ik_clamped,
-            mean_base_height_m,
-            base_height_range_m: height_range,
-            goals_reached,
-            region: {
-                let base = self.world.base_pose().translation.vector;
-                self.world.terrain().region_index_at(base.x, base.y)
-            },
-        };
-        observer.phase_ended(self, &outcome);
-        outcome
-    }
-
     /// The state now, for loggers and viewers; `tiles_half_side_m` sets the
     /// square around the base whose tiles are included (0: none).
     pub fn snapshot(&self, tiles_half_side_m: f64) -> StepSnapshot {
@@ -572,17 +447,18 @@ impl Task {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use std::sync::Arc;
 
     use nalgebra::{Isometry3, Vector3};
     use terrain_plugins::{BuildContext, Registry};
 
     use super::*;
+    use crate::action::SAMPLES_PER_PHASE;
     use crate::scripted::ScriptedCrawl;
     use crate::{RobotModel, WorldConfig};
 
-    fn task_on(spec: &str, config: TaskConfig, seed: u64) -> Task {
+    pub(super) fn task_on(spec: &str, config: TaskConfig, seed: u64) -> Task {
         let model = Arc::new(RobotModel::laikago());
         let ctx = BuildContext {
             supported_mass_kg: model.total_mass_kg(),

@@ -23,10 +23,14 @@ pub struct OnnxArgs {
 
 /// The ONNX model of `policy`'s deterministic actor.
 pub fn onnx_bytes(registry: &terrain_plugins::Registry, policy: &str) -> Result<Vec<u8>> {
-    let experiment::Policy::Trained { learner, .. } =
-        experiment::Policy::from_arg(registry, policy, None)?
-    else {
-        bail!("policy {policy:?}: the scripted crawl is not a network; give a trained policy");
+    let learner = match experiment::Policy::from_arg(registry, policy, None)? {
+        experiment::Policy::Trained { learner, .. } => learner,
+        experiment::Policy::Scripted(_) => {
+            bail!("policy {policy:?}: the scripted crawl is not a network; give a trained policy")
+        }
+        experiment::Policy::Residual { .. } => bail!(
+            "policy {policy:?}: a residual policy acts within its phase policy's phases at the control rate; its ONNX export is not written yet (export its phase policy)"
+        ),
     };
     let graph = learner
         .actor_graph()

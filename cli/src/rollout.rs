@@ -188,10 +188,9 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
     let mut regions: Vec<String> = Vec::new();
     let mut phases = 0;
     while !task.done() {
-        let action = policy.action(&task, &obs)?;
         let outcome = match &mut video {
-            Some(v) => task.step_phase_observed(&action, &mut obs, &mut Both(&mut logger, v)),
-            None => task.step_phase_observed(&action, &mut obs, &mut logger),
+            Some(v) => policy.run_phase(&mut task, &mut obs, &mut Both(&mut logger, v))?,
+            None => policy.run_phase(&mut task, &mut obs, &mut logger)?,
         };
         print_warnings(&mut logger);
         phases += 1;

@@ -84,6 +84,9 @@ fn parse_algo(text: &str) -> Result<&'static Registration, String> {
 struct Terminal {
     /// print each iteration's metrics line on stdout
     json: bool,
+    /// what one environment step is (`phases`, or `control steps` for a
+    /// residual policy)
+    step_unit: &'static str,
 }
 
 impl TrainObserver for Terminal {
@@ -94,12 +97,14 @@ impl TrainObserver for Terminal {
                 checkpoint.display()
             );
         }
+        self.step_unit = start.step_unit;
         eprintln!(
-            "training ({}) on {} with {} environments x {} phases per iteration, {} threads; run directory {}",
+            "training ({}) on {} with {} environments x {} {} per iteration, {} threads; run directory {}",
             start.algo,
             start.terrain,
             start.envs,
             start.steps_per_env,
+            start.step_unit,
             start.threads,
             start.run_dir.display()
         );
@@ -142,6 +147,7 @@ impl TrainObserver for Terminal {
             report.total,
             report.elapsed_secs,
             report.phases_done,
+            self.step_unit,
         );
         Ok(())
     }
@@ -259,7 +265,10 @@ pub fn train(
             loggers.push((e, logger));
         }
     }
-    let mut terminal = Terminal { json: args.json };
+    let mut terminal = Terminal {
+        json: args.json,
+        step_unit: "phases",
+    };
     match experiment::train::train(registry, plan, &model, loggers, &mut terminal, stop)? {
         TrainOutcome::Completed {
             iterations,
@@ -316,13 +325,19 @@ fn sink_for_env(sink: &RerunSink, env: usize, first: bool) -> RerunSink {
 
 /// One progress line per iteration on stderr: the episodes and the
 /// algorithm's headline figures.
-fn progress(stats: &IterationStats, total: u64, elapsed_secs: f64, phases_done: usize) {
+fn progress(
+    stats: &IterationStats,
+    total: u64,
+    elapsed_secs: f64,
+    steps_done: usize,
+    step_unit: &str,
+) {
     let width = 20;
     let iteration = stats.iteration;
     let filled = (iteration as usize * width / total.max(1) as usize).min(width);
     let bar: String = "#".repeat(filled) + &".".repeat(width - filled);
     let fmt = |v: Option<f64>, unit: &str| v.map_or("-".to_string(), |v| format!("{v:.2}{unit}"));
-    let rate = phases_done as f64 / elapsed_secs.max(1e-9);
+    let rate = steps_done as f64 / elapsed_secs.max(1e-9);
     let learner: Vec<String> = stats
         .headline
         .iter()
@@ -336,7 +351,7 @@ fn progress(stats: &IterationStats, total: u64, elapsed_secs: f64, phases_done: 
         })
         .collect();
     eprintln!(
-        "[{bar}] iter {iteration}/{total} | {rate:.1} phases/s | return {} | distance {} | length {} | {}",
+        "[{bar}] iter {iteration}/{total} | {rate:.1} {step_unit}/s | return {} | distance {} | length {} | {}",
         fmt(stats.episodes.mean_return, ""),
         fmt(stats.episode_metric("distance_m"), " m"),
         fmt(stats.episodes.mean_length, ""),

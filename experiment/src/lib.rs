@@ -21,6 +21,7 @@ pub mod config;
 pub mod eval;
 pub mod policy;
 pub mod recipes;
+pub mod residual;
 pub mod scene;
 pub mod task_env;
 pub mod train;

@@ -7,7 +7,10 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use robot::WorldConfig;
 use robot::scripted::ScriptedCrawl;
-use robot::task::{ActionPrior, Task, TaskConfig};
+use robot::snapshot::PhaseObserver;
+use robot::task::{ActionPrior, PhaseOutcome, Task, TaskConfig};
+
+use crate::residual::ResidualDriver;
 
 /// What chooses the actions.
 pub enum Policy {
@@ -23,6 +26,21 @@ pub enum Policy {
         /// the physics it was trained in
         physics: Box<WorldConfig>,
         /// set: sample actions with this generator; unset: the mean action
+        sampler: Option<Box<rand_chacha::ChaCha8Rng>>,
+    },
+    /// a trained residual policy (`[residual]`): its phase policy plans each
+    /// phase and it moves the feet's targets at the control rate
+    Residual {
+        /// the lower-level networks, loaded for acting
+        learner: Box<dyn learn::Algorithm>,
+        /// the phase policy and the phase under way
+        driver: Box<ResidualDriver>,
+        /// the task settings it was trained with (its phase policy's
+        /// observation layout and action prior)
+        task: Box<TaskConfig>,
+        /// the physics it was trained in
+        physics: Box<WorldConfig>,
+        /// set: sample the lower level's actions with this generator
         sampler: Option<Box<rand_chacha::ChaCha8Rng>>,
     },
 }
@@ -83,6 +101,29 @@ impl Policy {
             .task_at(learner.iteration().saturating_sub(1))
             .clone();
         let physics = config.physics;
+        if let Some(residual) = config.residual {
+            if learner.obs_size() != crate::residual::OBSERVATION_SIZE
+                || learner.action_size() != crate::residual::ACTION_SIZE
+            {
+                bail!(
+                    "policy {arg}: a residual policy's networks take {} observations and give {} actions, but these take {} and give {}",
+                    crate::residual::OBSERVATION_SIZE,
+                    crate::residual::ACTION_SIZE,
+                    learner.obs_size(),
+                    learner.action_size()
+                );
+            }
+            let phase_policy =
+                Self::from_arg(registry, &residual.phase_policy.to_string_lossy(), None)
+                    .with_context(|| format!("policy {arg}: [residual] phase_policy"))?;
+            return Ok(Self::Residual {
+                learner,
+                driver: Box::new(ResidualDriver::new(residual, phase_policy)),
+                task: Box::new(task),
+                physics: Box::new(physics),
+                sampler: sample_seed.map(|seed| Box::new(rand::SeedableRng::seed_from_u64(seed))),
+            });
+        }
         if learner.obs_size() != task.observation_size()
             || learner.action_size() != robot::action::ACTION_SIZE
         {
@@ -120,6 +161,11 @@ impl Policy {
                 task,
                 physics: trained_in,
                 ..
+            }
+            | Self::Residual {
+                task,
+                physics: trained_in,
+                ..
             } => {
                 if let Some(file) = strict
                     && (task_config.observation != task.observation
@@ -149,7 +195,9 @@ impl Policy {
         Ok(())
     }
 
-    /// The action for the task's next phase, given its observation.
+    /// The action for the task's next phase, given its observation (a
+    /// residual policy: its phase policy's; its own acts within the phase,
+    /// see [`Self::run_phase`]).
     pub fn action(&mut self, task: &Task, obs: &[f32]) -> Result<Vec<f32>> {
         Ok(match self {
             Self::Scripted(crawl) => crawl.act(task).to_vec(),
@@ -159,6 +207,43 @@ impl Policy {
                 ..
             } => learner.act_stochastic(obs, rng)?,
             Self::Trained { learner, .. } => learner.act_deterministic(obs)?,
+            Self::Residual { driver, .. } => driver.phase_action(task, obs)?,
         })
+    }
+
+    /// Runs the task's next phase from its observation `obs` (and writes
+    /// the next one there): the phase of this policy's action, or, for a
+    /// residual policy, its phase policy's phase moved at the control rate.
+    pub fn run_phase(
+        &mut self,
+        task: &mut Task,
+        obs: &mut [f32],
+        observer: &mut dyn PhaseObserver,
+    ) -> Result<PhaseOutcome> {
+        let Self::Residual {
+            learner,
+            driver,
+            sampler,
+            ..
+        } = self
+        else {
+            let action = self.action(task, obs)?;
+            return Ok(task.step_phase_observed(&action, obs, observer));
+        };
+        if task.phase() == 0 {
+            driver.reset();
+        }
+        driver.begin_phase(task, obs, observer)?;
+        let mut own = [0.0f32; crate::residual::OBSERVATION_SIZE];
+        loop {
+            driver.observe(task, &mut own);
+            let action = match sampler {
+                Some(rng) => learner.act_stochastic(&own, rng)?,
+                None => learner.act_deterministic(&own)?,
+            };
+            if let Some(outcome) = driver.control_step(task, &action, obs, observer).phase {
+                return Ok(outcome);
+            }
+        }
     }
 }

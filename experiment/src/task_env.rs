@@ -18,6 +18,8 @@ use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
 
 use crate::config::Experiment;
+use crate::policy::Policy;
+use crate::residual::{self, ResidualDriver};
 use crate::scene::make_world;
 
 /// Per-episode metrics, in the order of `episode_metrics`.
@@ -92,6 +94,16 @@ pub struct TaskEnv {
     /// the tasks were just built and never stepped (the first reset need
     /// not build them again)
     pristine: bool,
+    /// `[residual]`: each task stepped a control step at a time by its
+    /// driver (the policy trained is the lower level)
+    residual: Option<Residual>,
+}
+
+/// The drivers of a residual run, one per task, and each task's
+/// phase-level observation (what the frozen phase policy reads).
+struct Residual {
+    drivers: Vec<ResidualDriver>,
+    phase_obs: Vec<Vec<f32>>,
 }
 
 impl TaskEnv {
@@ -112,9 +124,31 @@ impl TaskEnv {
             .num_threads(threads)
             .build()
             .context("cannot start the environment threads")?;
+        let residual = match &experiment.residual {
+            None => None,
+            Some(config) => {
+                let phase_policy = config.phase_policy.to_string_lossy();
+                let drivers = (0..envs)
+                    .map(|_| {
+                        Policy::from_arg(registry, &phase_policy, None)
+                            .map(|p| ResidualDriver::new(config.clone(), p))
+                    })
+                    .collect::<Result<Vec<_>>>()
+                    .context("[residual] phase_policy")?;
+                Some(Residual {
+                    drivers,
+                    phase_obs: vec![vec![0.0; task.observation_size()]; envs],
+                })
+            }
+        };
+        let (obs_size, privileged_size) = match residual {
+            Some(_) => (residual::OBSERVATION_SIZE, 0),
+            None => (task.observation_size(), task.observation.privileged_size()),
+        };
         let mut env = Self {
-            obs_size: task.observation_size(),
-            privileged_size: task.observation.privileged_size(),
+            obs_size,
+            privileged_size,
+            residual,
             loggers: (0..envs).map(|_| None).collect(),
             tasks: Vec::new(),
             registry: registry.clone(),
@@ -201,11 +235,20 @@ impl VecEnv for TaskEnv {
     }
 
     fn action_size(&self) -> usize {
-        ACTION_SIZE
+        match self.residual {
+            Some(_) => residual::ACTION_SIZE,
+            None => ACTION_SIZE,
+        }
     }
 
     fn reward_term_names(&self) -> Vec<String> {
-        RewardTerms::NAMES.iter().map(ToString::to_string).collect()
+        match self.residual {
+            Some(_) => RESIDUAL_REWARD_TERMS
+                .iter()
+                .map(ToString::to_string)
+                .collect(),
+            None => RewardTerms::NAMES.iter().map(ToString::to_string).collect(),
+        }
     }
 
     fn episode_metric_names(&self) -> Vec<String> {
@@ -221,6 +264,23 @@ impl VecEnv for TaskEnv {
             self.tasks = self
                 .build_tasks(self.tasks.len())
                 .expect("worlds that were built once build again");
+        }
+        if let Some(residual) = &mut self.residual {
+            let Residual { drivers, phase_obs } = residual;
+            self.pool.install(|| {
+                self.tasks
+                    .par_iter_mut()
+                    .zip(obs.par_chunks_mut(width))
+                    .zip(self.loggers.par_iter_mut())
+                    .zip(drivers.par_iter_mut())
+                    .zip(phase_obs.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(i, ((((task, row), logger), driver), phase_row))| {
+                        task.set_seed(derive_seed(seed, i as u64));
+                        begin_residual_episode(task, driver, phase_row, row, logger);
+                    });
+            });
+            return;
         }
         self.pool.install(|| {
             self.tasks
@@ -256,6 +316,17 @@ impl VecEnv for TaskEnv {
             out.final_obs.fill(0.0);
             out.reward_terms.fill(0.0);
             out.episode_metrics.fill(0.0);
+            return;
+        }
+        if let Some(residual) = &mut self.residual {
+            step_residual(
+                &self.pool,
+                &mut self.tasks,
+                &mut self.loggers,
+                residual,
+                actions,
+                out,
+            );
             return;
         }
         let StepResult {
@@ -320,4 +391,112 @@ impl VecEnv for TaskEnv {
                 );
         });
     }
+}
+
+/// The reward terms of a residual run's control steps.
+pub const RESIDUAL_REWARD_TERMS: [&str; 2] = ["phase", "offset"];
+
+/// A residual task's new episode: the task reset, the driver's first phase
+/// planned, the lower-level observation written into `row`.
+fn begin_residual_episode(
+    task: &mut Task,
+    driver: &mut ResidualDriver,
+    phase_row: &mut [f32],
+    row: &mut [f32],
+    logger: &mut Option<EnvLogger>,
+) {
+    task.reset(phase_row);
+    driver.reset();
+    if let Some(l) = logger {
+        l.log_reset(task);
+    }
+    let begun = match logger {
+        Some(l) => driver.begin_phase(task, phase_row, &mut Timed(l)),
+        None => driver.begin_phase(task, phase_row, &mut NoObserver),
+    };
+    begun.expect("the phase policy acts on its own observation");
+    driver.observe(task, row);
+}
+
+/// One control step of every residual task (see [`crate::residual`]).
+fn step_residual(
+    pool: &rayon::ThreadPool,
+    tasks: &mut [Task],
+    loggers: &mut [Option<EnvLogger>],
+    residual: &mut Residual,
+    actions: &[f32],
+    out: &mut StepResult,
+) {
+    let m = EPISODE_METRICS.len();
+    let t = RESIDUAL_REWARD_TERMS.len();
+    let Residual { drivers, phase_obs } = residual;
+    let StepResult {
+        obs,
+        rewards,
+        terminated,
+        truncated,
+        final_obs,
+        reward_terms,
+        episode_metrics,
+    } = out;
+    pool.install(|| {
+        tasks
+            .par_iter_mut()
+            .zip(loggers.par_iter_mut())
+            .zip(drivers.par_iter_mut())
+            .zip(phase_obs.par_iter_mut())
+            .zip(actions.par_chunks(residual::ACTION_SIZE))
+            .zip(obs.par_chunks_mut(residual::OBSERVATION_SIZE))
+            .zip(final_obs.par_chunks_mut(residual::OBSERVATION_SIZE))
+            .zip(reward_terms.par_chunks_mut(t))
+            .zip(episode_metrics.par_chunks_mut(m))
+            .zip(rewards.par_iter_mut())
+            .zip(terminated.par_iter_mut().zip(truncated.par_iter_mut()))
+            .for_each(
+                |(
+                    (
+                        (
+                            (
+                                ((((((task, logger), driver), phase_row), action), row), final_row),
+                                terms,
+                            ),
+                            metrics,
+                        ),
+                        reward,
+                    ),
+                    (term, trunc),
+                )| {
+                    let outcome = match logger {
+                        Some(l) => driver.control_step(task, action, phase_row, &mut Timed(l)),
+                        None => driver.control_step(task, action, phase_row, &mut NoObserver),
+                    };
+                    *reward = outcome.reward as f32;
+                    terms[0] = (outcome.reward - outcome.offset_reward) as f32;
+                    terms[1] = outcome.offset_reward as f32;
+                    let (ended, cut) = outcome.phase.as_ref().map_or((false, false), |p| {
+                        (
+                            p.termination.is_some(),
+                            p.truncated && p.termination.is_none(),
+                        )
+                    });
+                    *term = ended;
+                    *trunc = cut;
+                    if outcome.phase.is_some() && !ended && !cut {
+                        let begun = match logger {
+                            Some(l) => driver.begin_phase(task, phase_row, &mut Timed(l)),
+                            None => driver.begin_phase(task, phase_row, &mut NoObserver),
+                        };
+                        begun.expect("the phase policy acts on its own observation");
+                    }
+                    driver.observe(task, row);
+                    if ended || cut {
+                        final_row.copy_from_slice(row);
+                        let base_x_m = task.world().base_pose().translation.vector.x;
+                        metrics[0] = (base_x_m - task.start_xy_m()[0]) as f32;
+                        metrics[1] = task.goals_reached() as f32;
+                        begin_residual_episode(task, driver, phase_row, row, logger);
+                    }
+                },
+            );
+    });
 }

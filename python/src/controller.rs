@@ -163,7 +163,7 @@ impl Controller {
         let policy = experiment::Policy::from_arg(&registry(), path, None).map_err(value_error)?;
         let experiment::Policy::Trained { task, .. } = policy else {
             return Err(PyValueError::new_err(format!(
-                "policy {path:?} is not a trained policy"
+                "policy {path:?} is not a trained phase-level policy (the scripted crawl and residual policies are not)"
             )));
         };
         Self::of_task(&task)

@@ -31,7 +31,7 @@ impl Policy {
         let policy = experiment::Policy::from_arg(&registry, path, None).map_err(value_error)?;
         let experiment::Policy::Trained { learner, .. } = policy else {
             return Err(PyValueError::new_err(format!(
-                "policy {path:?} is not a trained policy"
+                "policy {path:?} is not a trained phase-level policy (the scripted crawl and residual policies are not)"
             )));
         };
         let dir = learn::checkpoint::resolve_checkpoint(std::path::Path::new(path))

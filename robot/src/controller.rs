@@ -438,6 +438,26 @@ impl PhaseController {
         foot_offsets_m: Option<&[Vector3<f64>; 4]>,
         targets_rad: &mut [f64],
     ) -> usize {
+        let feet_m = self.planned_feet_m(plan, sample);
+        let mut clamped = 0;
+        for (kin, joints) in self.legs.iter().zip(&self.leg_joints) {
+            let mut foot_in_target = feet_m[kin.name.index()];
+            if let Some(offsets) = foot_offsets_m {
+                foot_in_target += offsets[kin.name.index()];
+            }
+            let solution = kin.inverse(foot_in_target);
+            clamped += solution.clamped as usize;
+            for (k, &j) in joints.iter().enumerate() {
+                targets_rad[j] = solution.q_rad[k];
+            }
+        }
+        clamped
+    }
+
+    /// Where `plan` puts each foot at control step `sample` (leg order), in
+    /// the base's target frame of that sample, m: the points the IK of
+    /// [`Self::joint_targets`] solves for.
+    pub fn planned_feet_m(&self, plan: &PhasePlan, sample: usize) -> [Vector3<f64>; 4] {
         let t = sample as f64 / SAMPLES_PER_PHASE as f64;
         let curves = &plan.curves;
         let rpy = curves.base_orientation.at(t);
@@ -447,24 +467,16 @@ impl PhaseController {
         );
         let base_target = plan.base_start * offset;
         let world_from_target_inv = base_target.inverse();
-        let mut clamped = 0;
-        for (kin, joints) in self.legs.iter().zip(&self.leg_joints) {
+        let mut feet_m = [Vector3::zeros(); 4];
+        for kin in &self.legs {
             let foot_world = if kin.name == plan.swing_leg {
                 plan.base_start * Point3::from(curves.swing_foot.at(t))
             } else {
                 Point3::from(plan.feet_world_start_m[kin.name.index()])
             };
-            let mut foot_in_target = world_from_target_inv * foot_world;
-            if let Some(offsets) = foot_offsets_m {
-                foot_in_target += offsets[kin.name.index()];
-            }
-            let solution = kin.inverse(foot_in_target.coords);
-            clamped += solution.clamped as usize;
-            for (k, &j) in joints.iter().enumerate() {
-                targets_rad[j] = solution.q_rad[k];
-            }
+            feet_m[kin.name.index()] = (world_from_target_inv * foot_world).coords;
         }
-        clamped
+        feet_m
     }
 
     /// Remembers the feet of `state`, the state before a control step is

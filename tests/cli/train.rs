@@ -904,6 +904,88 @@ fn trained_checkpoints_play_and_roll_out() {
 }
 
 #[test]
+fn a_lower_level_residual_policy_trains_within_its_phase_policys_phases_and_runs() {
+    // `[residual]` on the scripted crawl: the policy trained moves the
+    // feet's targets 30 times a phase; 60 control steps per world and
+    // iteration are two phases.
+    let dir = scratch_dir("lower-residual");
+    let config = tiny_variant(&dir, "steps_per_env = 4\n", "steps_per_env = 60\n");
+    let text =
+        std::fs::read_to_string(&config).unwrap() + "\n[residual]\nphase_policy = \"scripted\"\n";
+    std::fs::write(
+        &config,
+        text.replace("spec = \"rigid\"", "spec = \"elastic:2cm\""),
+    )
+    .unwrap();
+    let run = dir.join("run");
+    train_tiny(&config, &run, "2");
+    let resolved = std::fs::read_to_string(run.join("latest/config.toml")).unwrap();
+    assert!(
+        resolved.contains("[residual]\nphase_policy = \"scripted\"\ncontrol_steps = 6\n"),
+        "{resolved}"
+    );
+    // the networks take the 69 lower-level values and give 12 offsets
+    let weights = weights(&run);
+    let header_len = u64::from_le_bytes(weights[..8].try_into().unwrap()) as usize;
+    let header: Value = serde_json::from_slice(&weights[8..8 + header_len]).unwrap();
+    assert_eq!(
+        header["actor.0.weight"]["shape"],
+        serde_json::json!([69, 16]),
+        "{header}"
+    );
+    let metrics = std::fs::read_to_string(run.join("metrics.jsonl")).unwrap();
+    let first: Value = serde_json::from_str(metrics.lines().next().unwrap()).unwrap();
+    assert_eq!(first["phases"], 120, "{first}");
+    assert!(first["reward_terms"].get("offset").is_some(), "{first}");
+    // it rolls out and evaluates, phase by phase, and moves the crawl's feet
+    let rollout = |policy: &str| {
+        json_of(&[
+            "rollout",
+            "--policy",
+            policy,
+            "--terrain",
+            "elastic:2cm",
+            "--phases",
+            "3",
+            "--json",
+        ])
+    };
+    let moved = rollout(s(&run));
+    let crawl = rollout("scripted");
+    assert_eq!(moved["phases"], 3, "{moved}");
+    assert_ne!(moved["distance_m"], crawl["distance_m"]);
+    let e = json_of(&[
+        "eval",
+        "--policy",
+        s(&run),
+        "--terrain",
+        "elastic:2cm",
+        "--episodes",
+        "1",
+        "--phases",
+        "3",
+        "--seed",
+        "0",
+        "--json",
+        "--out",
+        s(&dir.join("eval")),
+    ]);
+    assert_eq!(e["episodes"][0]["distance_m"], moved["distance_m"], "{e}");
+    // a control rate that does not divide the phase is refused
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        TINY.to_string() + "\n[residual]\nphase_policy = \"scripted\"\ncontrol_steps = 7\n",
+    )
+    .unwrap();
+    let err = failure(&train_args(&bad, &dir.join("bad-run"), "1"), 1);
+    assert!(
+        err.contains("[residual]") && err.contains("control_steps = 7"),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_residual_policy_on_the_crawl_trains_and_rolls_out() {
     let dir = scratch_dir("residual");
     let config = tiny_variant(

@@ -1,5 +1,6 @@
 //! Experiment files in TOML: `[terrain]`, `[task]`, `[physics]`, `[algo]`,
-//! `[ppo]`, `[sac]`, `[train]` and `[[curriculum]]`. Every section but the terrain is optional (defaults
+//! `[ppo]`, `[sac]`, `[train]`, `[[curriculum]]` and `[residual]` (a
+//! lower-level policy within a phase policy's phases, see [`residual`]). Every section but the terrain is optional (defaults
 //! where silent); unknown keys are errors.
 //!
 //! ```toml
@@ -70,6 +71,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use learn::PpoConfig;
 use learn::Settings;
 use learn::registry::{self, Registration};
+pub use residual::ResidualConfig;
 use robot::WorldConfig;
 use robot::task::TaskConfig;
 use serde::{Deserialize, Serialize};
@@ -79,6 +81,7 @@ pub mod advance;
 mod curriculum;
 mod defaults;
 mod fork;
+pub mod residual;
 mod terrain_table;
 mod train_settings;
 
@@ -95,7 +98,7 @@ use terrain_table::terrain_from_table;
 fn known_sections() -> Vec<&'static str> {
     let mut known = vec!["terrain", "task", "physics", "algo"];
     known.extend(registry::tables());
-    known.extend(["train", "curriculum"]);
+    known.extend(["train", "curriculum", "residual"]);
     known
 }
 
@@ -121,6 +124,10 @@ pub struct Experiment {
     pub train: TrainSettings,
     /// curriculum stages, in order (empty: the terrain for all iterations)
     pub curriculum: Vec<Stage>,
+    /// `[residual]`: the policy trained moves the feet's targets within the
+    /// phases a frozen phase-level policy plans (`None`: the policy is the
+    /// phase-level one)
+    pub residual: Option<ResidualConfig>,
 }
 
 /// The algorithm tables as written. They take no part in comparisons: two
@@ -215,6 +222,19 @@ impl Experiment {
         physics
             .validate()
             .map_err(|e| anyhow!("config {source} [physics]: {e}"))?;
+        let residual = match doc.get("residual") {
+            None => None,
+            Some(value) => {
+                let residual: ResidualConfig =
+                    value.clone().try_into().map_err(|e: toml::de::Error| {
+                        anyhow!("config {source} [residual]: {}", e.message())
+                    })?;
+                residual
+                    .validate()
+                    .with_context(|| format!("config {source} [residual]"))?;
+                Some(residual)
+            }
+        };
         let algo_tables = AlgoTables(algo_tables);
         let settings = algo_tables
             .resolve(algo)
@@ -228,6 +248,7 @@ impl Experiment {
             algo_tables,
             train,
             curriculum,
+            residual,
         };
         experiment.check_stage_rates(&format!("config {source}"))?;
         Ok(experiment)
@@ -263,6 +284,7 @@ impl Experiment {
             algo_tables: AlgoTables::default(),
             train: TrainSettings::default(),
             curriculum: Vec::new(),
+            residual: None,
         }
     }
 
@@ -316,6 +338,14 @@ impl Experiment {
                 text.push_str("\n[curriculum.task]\n");
                 text.push_str(&toml::to_string(&stage.task_overrides).expect("a table serialises"));
             }
+        }
+        if let Some(residual) = &self.residual {
+            text.push_str(
+                "
+[residual]
+",
+            );
+            text.push_str(&toml::to_string(residual).expect("residual settings serialise"));
         }
         text
     }

@@ -162,10 +162,9 @@ impl<'a> EvalScene<'a> {
             o.episode_started(&task);
         }
         while !task.done() {
-            let action = policy.action(&task, &obs)?;
             let outcome = match observer.as_deref_mut() {
-                Some(o) => task.step_phase_observed(&action, &mut obs, &mut Both(&mut recorder, o)),
-                None => task.step_phase_observed(&action, &mut obs, &mut recorder),
+                Some(o) => policy.run_phase(&mut task, &mut obs, &mut Both(&mut recorder, o))?,
+                None => policy.run_phase(&mut task, &mut obs, &mut recorder)?,
             };
             reward_total += outcome.reward;
         }

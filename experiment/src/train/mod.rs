@@ -41,8 +41,10 @@ pub struct RunStart<'a> {
     pub terrain: &'a TerrainSpec,
     /// parallel worlds
     pub envs: usize,
-    /// phases per world per iteration
+    /// steps per world per iteration
     pub steps_per_env: usize,
+    /// what a step is: `phases`, or `control steps` for a residual policy
+    pub step_unit: &'static str,
     /// threads stepping the worlds
     pub threads: usize,
     /// where the run writes
@@ -191,6 +193,11 @@ pub fn train(
         terrain: experiment.terrain_at(start_iteration).1,
         envs: experiment.train.envs,
         steps_per_env: trainer.steps_per_env(),
+        step_unit: if experiment.residual.is_some() {
+            "control steps"
+        } else {
+            "phases"
+        },
         threads,
         run_dir: &run_dir,
         forked_from: fork.as_deref().map(|c| (c, start_iteration)),

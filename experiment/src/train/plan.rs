@@ -35,7 +35,7 @@ impl RunPlan {
     /// `experiment` reproduces.
     pub fn fresh(
         registry: &Registry,
-        experiment: Experiment,
+        mut experiment: Experiment,
         run_dir: PathBuf,
         model: &RobotModel,
         threads: usize,
@@ -55,6 +55,9 @@ impl RunPlan {
                 model.joints.len()
             );
         }
+        if experiment.residual.is_some() {
+            crate::residual::fit_to_phase_policy(registry, &mut experiment)?;
+        }
         if let Some(fork) = fork {
             let (learner, checkpoint) = fork_from(fork, &experiment, registry)?;
             return Ok(Self {
@@ -65,12 +68,22 @@ impl RunPlan {
                 fork: Some(checkpoint),
             });
         }
-        let (obs, actions, seed) = (
-            experiment.task.observation_size(),
-            robot::action::ACTION_SIZE,
-            experiment.train.seed,
-        );
-        let privileged = experiment.task.observation.privileged_size();
+        let (obs, actions, seed) = match experiment.residual {
+            Some(_) => (
+                crate::residual::OBSERVATION_SIZE,
+                crate::residual::ACTION_SIZE,
+                experiment.train.seed,
+            ),
+            None => (
+                experiment.task.observation_size(),
+                robot::action::ACTION_SIZE,
+                experiment.train.seed,
+            ),
+        };
+        let privileged = match experiment.residual {
+            Some(_) => 0,
+            None => experiment.task.observation.privileged_size(),
+        };
         let learner = experiment.learner().build((obs, privileged), actions, seed);
         let learner = if privileged > 0 {
             learner.context("[task.observation] privileged_critic")?

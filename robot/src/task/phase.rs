@@ -126,6 +126,14 @@ impl Task {
         !run.finished()
     }
 
+    /// Where `run`'s plan puts each foot at its next physics step (leg
+    /// order, in the base's target frame of that step), m: what a
+    /// lower-level controller moves.
+    pub fn planned_feet_m(&self, run: &PhaseRun) -> [Vector3<f64>; 4] {
+        let sample = (run.steps + 1).min(SAMPLES_PER_PHASE);
+        self.controller.planned_feet_m(&run.plan, sample)
+    }
+
     /// Ends a finished run: the phase's reward, the goals, the episode's
     /// end, and the next observation into `obs`.
     pub fn end_phase(

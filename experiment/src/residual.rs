@@ -1,0 +1,328 @@
+//! A residual controller within the phase (`[residual]`, the paper's first
+//! proposal for reacting while the ground moves): a frozen phase-level
+//! policy plans every phase as quadwalk's task does, and a lower-level
+//! policy moves each foot's target every `control_steps` physics steps
+//! (40 Hz by default) from what the robot measures. [`ResidualDriver`] runs
+//! it for one robot; `TaskEnv` trains through it and [`crate::policy`]
+//! evaluates with it, so training and evaluation step alike.
+//!
+//! The lower-level observation ([`OBSERVATION_SIZE`] values, all in the
+//! base frame unless said): the phase's progress (1), the swing leg one-hot
+//! (4), the base's roll and pitch (2, rad), its angular velocity (3, rad/s)
+//! and linear velocity (3, m/s), the hip heights h_b (4, m), each foot's
+//! planned position at the next step in the base's target frame (12, m),
+//! its measured position (12, m) and velocity (12, m/s), whether it
+//! touches the ground (4), and the previous action (12). What the feet
+//! feel shows as the gap between planned and measured feet and in their
+//! velocities: a foot that sinks further than planned lags its plan.
+//!
+//! The action (12 values in [-1, 1]) times `max_offset_m` moves the feet's
+//! targets (FR, FL, RR, RL; x, y, z each) for the control step's physics
+//! steps, before IK. The reward of a control step is -offset_cost x the
+//! mean squared action, plus, at the control step that ends a phase, the
+//! phase's own reward (the task's, termination included): the lower level
+//! is paid for what the phase level is paid for.
+
+use anyhow::{Context, Result};
+use nalgebra::Vector3;
+use robot::task::{PhaseOutcome, PhaseRun, Task};
+
+use crate::config::{Experiment, ResidualConfig};
+use crate::policy::Policy;
+use robot::snapshot::PhaseObserver;
+
+/// Values of the lower-level observation.
+pub const OBSERVATION_SIZE: usize = 69;
+/// Values of the lower-level action: an offset per foot and axis.
+pub const ACTION_SIZE: usize = 12;
+
+/// Gives `experiment` its phase policy's observation, action prior and
+/// physics (the phase policy reads the task's observation and was trained
+/// in those physics), as an evaluation fits a scene to a policy; the run's
+/// `config.toml` then spells them out.
+pub fn fit_to_phase_policy(
+    registry: &terrain_plugins::Registry,
+    experiment: &mut Experiment,
+) -> Result<()> {
+    let Some(config) = &experiment.residual else {
+        return Ok(());
+    };
+    let phase_policy = Policy::from_arg(registry, &config.phase_policy.to_string_lossy(), None)
+        .context("[residual] phase_policy")?;
+    phase_policy.fit_scene(&mut experiment.task, &mut experiment.physics, None)
+}
+
+/// What one control step did.
+#[derive(Debug, Clone)]
+pub struct ControlOutcome {
+    /// the control step's reward (see the module docs)
+    pub reward: f64,
+    /// the offsets' cost in it (a negative number or 0)
+    pub offset_reward: f64,
+    /// the phase's outcome, if the phase ended in this control step
+    pub phase: Option<PhaseOutcome>,
+}
+
+/// The residual controller of one robot: the phase policy, the phase under
+/// way and the previous action.
+pub struct ResidualDriver {
+    config: ResidualConfig,
+    phase_policy: Policy,
+    run: Option<PhaseRun>,
+    last_action: [f32; ACTION_SIZE],
+}
+
+impl ResidualDriver {
+    /// A driver with `phase_policy` planning the phases.
+    pub fn new(config: ResidualConfig, phase_policy: Policy) -> Self {
+        Self {
+            config,
+            phase_policy,
+            run: None,
+            last_action: [0.0; ACTION_SIZE],
+        }
+    }
+
+    /// Forgets the episode (after the task's reset).
+    pub fn reset(&mut self) {
+        self.run = None;
+        self.last_action = [0.0; ACTION_SIZE];
+    }
+
+    /// Whether a phase is under way.
+    pub fn in_phase(&self) -> bool {
+        self.run.is_some()
+    }
+
+    /// The phase policy's action for the task's next phase.
+    pub fn phase_action(&mut self, task: &Task, phase_obs: &[f32]) -> Result<Vec<f32>> {
+        self.phase_policy.action(task, phase_obs)
+    }
+
+    /// Plans the next phase with the phase policy from the task's
+    /// phase-level observation `phase_obs`.
+    pub fn begin_phase(
+        &mut self,
+        task: &mut Task,
+        phase_obs: &[f32],
+        observer: &mut dyn PhaseObserver,
+    ) -> Result<()> {
+        let action = self.phase_policy.action(task, phase_obs)?;
+        self.run = Some(task.begin_phase(&action, observer));
+        Ok(())
+    }
+
+    /// One control step with `action` (12 values, clipped to [-1, 1]): the
+    /// phase goes on `control_steps` physics steps (fewer if it ends or
+    /// the robot falls); a phase that ends writes the next phase-level
+    /// observation into `phase_obs`.
+    pub fn control_step(
+        &mut self,
+        task: &mut Task,
+        action: &[f32],
+        phase_obs: &mut [f32],
+        observer: &mut dyn PhaseObserver,
+    ) -> ControlOutcome {
+        let run = self
+            .run
+            .as_mut()
+            .expect("a control step runs inside a phase: begin_phase first");
+        let mut clipped = [0.0f32; ACTION_SIZE];
+        for (c, a) in clipped.iter_mut().zip(action) {
+            *c = a.clamp(-1.0, 1.0);
+        }
+        let offsets_m: [Vector3<f64>; 4] = std::array::from_fn(|leg| {
+            Vector3::from_fn(|axis, _| {
+                f64::from(clipped[3 * leg + axis]) * self.config.max_offset_m
+            })
+        });
+        for _ in 0..self.config.control_steps {
+            if !task.step_in_phase(run, Some(&offsets_m), observer) {
+                break;
+            }
+        }
+        self.last_action = clipped;
+        let mean_square =
+            clipped.iter().map(|a| f64::from(a * a)).sum::<f64>() / ACTION_SIZE as f64;
+        let offset_reward = -self.config.offset_cost * mean_square;
+        let phase = if run.finished() {
+            let run = self.run.take().expect("the phase under way");
+            Some(task.end_phase(run, phase_obs, observer))
+        } else {
+            None
+        };
+        ControlOutcome {
+            reward: offset_reward + phase.as_ref().map_or(0.0, |p| p.reward),
+            offset_reward,
+            phase,
+        }
+    }
+
+    /// Writes the lower-level observation ([`OBSERVATION_SIZE`] values,
+    /// see the module docs) into `out`. Between phases (after the last
+    /// one) the plan is the measured feet and the progress 1.
+    pub fn observe(&self, task: &Task, out: &mut [f32]) {
+        assert_eq!(
+            out.len(),
+            OBSERVATION_SIZE,
+            "the residual observation's size"
+        );
+        let world = task.world();
+        let pose = world.base_pose();
+        let to_base = pose.rotation.inverse();
+        let (linear, angular) = world.base_velocity();
+        let feet_base = robot::controller::feet_in_base_m(&pose, world.feet_in_world_m());
+        let (progress, swing, planned) = match &self.run {
+            Some(run) => (
+                run.steps as f64 / robot::action::SAMPLES_PER_PHASE as f64,
+                Some(run.plan.swing_leg.index()),
+                task.planned_feet_m(run),
+            ),
+            None => (1.0, None, feet_base),
+        };
+        let (roll, pitch, _) = pose.rotation.euler_angles();
+        let mut values: Vec<f64> = Vec::with_capacity(OBSERVATION_SIZE);
+        values.push(progress);
+        values.extend((0..4).map(|leg| f64::from(u8::from(swing == Some(leg)))));
+        values.extend([roll, pitch]);
+        values.extend((to_base * angular).iter());
+        values.extend((to_base * linear).iter());
+        values.extend(task.hip_heights_m());
+        for foot in planned {
+            values.extend(foot.iter());
+        }
+        for foot in feet_base {
+            values.extend(foot.iter());
+        }
+        for velocity in world.foot_sole_velocities_m_per_s() {
+            values.extend((to_base * velocity).iter());
+        }
+        values.extend(
+            world
+                .feet_touching_ground()
+                .iter()
+                .map(|&t| f64::from(u8::from(t))),
+        );
+        values.extend(self.last_action.iter().map(|&a| f64::from(a)));
+        debug_assert_eq!(values.len(), OBSERVATION_SIZE);
+        for (o, v) in out.iter_mut().zip(values) {
+            *o = v as f32;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use robot::scripted::ScriptedCrawl;
+    use robot::snapshot::NoObserver;
+    use robot::task::TaskConfig;
+    use robot::{RobotModel, WorldConfig};
+    use terrain_plugins::Registry;
+
+    use super::*;
+    use crate::scene::make_world;
+
+    fn task(spec: &str) -> Task {
+        let registry = Registry::builtin();
+        let world = make_world(
+            &registry,
+            &spec.parse().unwrap(),
+            Arc::new(RobotModel::laikago()),
+            7,
+            [0.0, 0.0],
+            &WorldConfig::default(),
+        )
+        .unwrap();
+        Task::new(world, TaskConfig::default(), 5)
+    }
+
+    fn driver() -> ResidualDriver {
+        let config = ResidualConfig {
+            phase_policy: "scripted".into(),
+            ..ResidualConfig::default()
+        };
+        ResidualDriver::new(config, Policy::Scripted(ScriptedCrawl::default()))
+    }
+
+    #[test]
+    fn zero_offsets_run_the_phase_policys_phases_bit_for_bit() {
+        // The crawl on 5 cm tiles: six phases whole, and six driven at 40 Hz
+        // with every offset 0: the same rewards to the bit, observations
+        // and base poses; a control step's reward is the phase's at its
+        // last one and 0 before.
+        let (mut plain, mut driven) = (task("elastic:5cm"), task("elastic:5cm"));
+        let n = plain.observation_size();
+        let (mut obs_a, mut obs_b) = (vec![0.0; n], vec![0.0; n]);
+        plain.reset(&mut obs_a);
+        driven.reset(&mut obs_b);
+        let mut crawl = Policy::Scripted(ScriptedCrawl::default());
+        let mut driver = driver();
+        let mut own = [0.0f32; OBSERVATION_SIZE];
+        for _ in 0..6 {
+            let action = crawl.action(&plain, &obs_a).unwrap();
+            let whole = plain.step_phase(&action, &mut obs_a);
+            driver
+                .begin_phase(&mut driven, &obs_b, &mut NoObserver)
+                .unwrap();
+            let mut steps = 0;
+            let outcome = loop {
+                driver.observe(&driven, &mut own);
+                assert!(own.iter().all(|v| v.is_finite()), "{own:?}");
+                let out = driver.control_step(
+                    &mut driven,
+                    &[0.0; ACTION_SIZE],
+                    &mut obs_b,
+                    &mut NoObserver,
+                );
+                steps += 1;
+                assert_eq!(out.offset_reward, 0.0);
+                match out.phase {
+                    Some(phase) => {
+                        assert_eq!(out.reward.to_bits(), phase.reward.to_bits());
+                        break phase;
+                    }
+                    None => assert_eq!(out.reward, 0.0),
+                }
+            };
+            assert_eq!(steps, 30, "40 Hz: 30 control steps per phase");
+            assert_eq!(outcome.reward.to_bits(), whole.reward.to_bits());
+            assert_eq!(obs_a, obs_b);
+            assert_eq!(plain.world().base_pose(), driven.world().base_pose());
+        }
+    }
+
+    #[test]
+    fn the_observation_reads_the_plan_and_the_feet_and_the_action_moves_them() {
+        let mut task = task("elastic:2cm");
+        let mut phase_obs = vec![0.0; task.observation_size()];
+        task.reset(&mut phase_obs);
+        let mut driver = driver();
+        driver
+            .begin_phase(&mut task, &phase_obs, &mut NoObserver)
+            .unwrap();
+        let mut own = [0.0f32; OBSERVATION_SIZE];
+        driver.observe(&task, &mut own);
+        // progress 0, one swing leg, the plan's feet near the measured
+        // ones at the phase start (within 2 cm), no previous action
+        assert_eq!(own[0], 0.0);
+        assert_eq!(own[1..5].iter().sum::<f32>(), 1.0);
+        for k in 0..12 {
+            assert!((own[17 + k] - own[29 + k]).abs() < 0.02, "{k}: {own:?}");
+        }
+        assert!(own[57..].iter().all(|&a| a == 0.0));
+        // every foot's target 3 cm lower (action -1 on z, bound 3 cm) for
+        // one control step: the cost is offset_cost x 1/3 and the action is
+        // the next observation's last block
+        let mut action = [0.0f32; ACTION_SIZE];
+        for leg in 0..4 {
+            action[3 * leg + 2] = -1.0;
+        }
+        let out = driver.control_step(&mut task, &action, &mut phase_obs, &mut NoObserver);
+        assert!((out.offset_reward + 0.02 / 3.0).abs() < 1e-9, "{out:?}");
+        driver.observe(&task, &mut own);
+        assert!((own[0] - 6.0 / 180.0).abs() < 1e-6);
+        assert_eq!(&own[57..], &action[..]);
+    }
+}

@@ -378,9 +378,7 @@ impl VecEnv for TaskEnv {
                         *trunc = outcome.truncated && !*term;
                         if *term || *trunc {
                             final_row.copy_from_slice(obs_row);
-                            let base_x_m = task.world().base_pose().translation.vector.x;
-                            metrics[0] = (base_x_m - task.start_xy_m()[0]) as f32;
-                            metrics[1] = task.goals_reached() as f32;
+                            write_episode_metrics(task, metrics);
                             task.reset(&mut obs_row[..o]);
                             task.observe_privileged(&mut obs_row[o..]);
                             if let Some(l) = logger {
@@ -391,6 +389,14 @@ impl VecEnv for TaskEnv {
                 );
         });
     }
+}
+
+/// An ended episode's [`EPISODE_METRICS`]: the distance along x from its
+/// start, m, and the goals reached.
+fn write_episode_metrics(task: &Task, metrics: &mut [f32]) {
+    let base_x_m = task.world().base_pose().translation.vector.x;
+    metrics[0] = (base_x_m - task.start_xy_m()[0]) as f32;
+    metrics[1] = task.goals_reached() as f32;
 }
 
 /// The reward terms of a residual run's control steps.
@@ -491,9 +497,7 @@ fn step_residual(
                     driver.observe(task, row);
                     if ended || cut {
                         final_row.copy_from_slice(row);
-                        let base_x_m = task.world().base_pose().translation.vector.x;
-                        metrics[0] = (base_x_m - task.start_xy_m()[0]) as f32;
-                        metrics[1] = task.goals_reached() as f32;
+                        write_episode_metrics(task, metrics);
                         begin_residual_episode(task, driver, phase_row, row, logger);
                     }
                 },

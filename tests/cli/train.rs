@@ -141,6 +141,15 @@ fn resume_from(checkpoint: &Path) -> String {
     ])
 }
 
+/// The shape of the actor's first layer in `run`'s latest weights
+/// (safetensors header: inputs, hidden units).
+fn first_layer_shape(run: &Path) -> Value {
+    let weights = weights(run);
+    let header_len = u64::from_le_bytes(weights[..8].try_into().unwrap()) as usize;
+    let header: Value = serde_json::from_slice(&weights[8..8 + header_len]).unwrap();
+    header["actor.0.weight"]["shape"].clone()
+}
+
 fn weights(run: &Path) -> Vec<u8> {
     std::fs::read(run.join("latest/weights.safetensors")).unwrap()
 }
@@ -925,14 +934,7 @@ fn a_lower_level_residual_policy_trains_within_its_phase_policys_phases_and_runs
         "{resolved}"
     );
     // the networks take the 69 lower-level values and give 12 offsets
-    let weights = weights(&run);
-    let header_len = u64::from_le_bytes(weights[..8].try_into().unwrap()) as usize;
-    let header: Value = serde_json::from_slice(&weights[8..8 + header_len]).unwrap();
-    assert_eq!(
-        header["actor.0.weight"]["shape"],
-        serde_json::json!([69, 16]),
-        "{header}"
-    );
+    assert_eq!(first_layer_shape(&run), serde_json::json!([69, 16]));
     let metrics = std::fs::read_to_string(run.join("metrics.jsonl")).unwrap();
     let first: Value = serde_json::from_str(metrics.lines().next().unwrap()).unwrap();
     assert_eq!(first["phases"], 120, "{first}");
@@ -1001,14 +1003,7 @@ fn a_residual_policy_on_the_crawl_trains_and_rolls_out() {
         "{resolved}"
     );
     // the networks take the paper's 102 values and the crawl's 27
-    let weights = weights(&run);
-    let header_len = u64::from_le_bytes(weights[..8].try_into().unwrap()) as usize;
-    let header: Value = serde_json::from_slice(&weights[8..8 + header_len]).unwrap();
-    assert_eq!(
-        header["actor.0.weight"]["shape"],
-        serde_json::json!([129, 16]),
-        "{header}"
-    );
+    assert_eq!(first_layer_shape(&run), serde_json::json!([129, 16]));
     let r = json_of(&[
         "rollout",
         "--policy",

@@ -138,13 +138,22 @@ fn stats(values: &[f64]) -> serde_json::Value {
 fn run(registry: &Registry, args: &Run) -> Result<()> {
     args.video.check()?;
     let experiment = args.scene.experiment(registry)?;
-    let (spec, mut task_config, mut physics) =
-        (experiment.terrain, experiment.task, experiment.physics);
     let mut policy = Policy::from_arg(
         registry,
         args.policy,
         args.flags.stochastic.then_some(args.flags.seed),
     )?;
+    policy.check_scene_residual(
+        experiment.residual.as_ref(),
+        &args
+            .scene
+            .config_path()
+            .map_or("the scene".to_string(), |p| {
+                format!("--config {}", p.display())
+            }),
+    )?;
+    let (spec, mut task_config, mut physics) =
+        (experiment.terrain, experiment.task, experiment.physics);
     policy.fit_scene(&mut task_config, &mut physics, None)?;
     task_config.max_phases = args.phases as usize;
     let model = args.scene.robot()?;

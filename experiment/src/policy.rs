@@ -10,6 +10,7 @@ use robot::scripted::ScriptedCrawl;
 use robot::snapshot::PhaseObserver;
 use robot::task::{ActionPrior, PhaseOutcome, Task, TaskConfig};
 
+use crate::config::ResidualConfig;
 use crate::residual::ResidualDriver;
 
 /// What chooses the actions.
@@ -193,6 +194,26 @@ impl Policy {
             Self::Scripted(_) => {}
         }
         Ok(())
+    }
+
+    /// Refuses a scene whose experiment file has a `[residual]` table
+    /// (`scene_residual`, from `source`) that is not this policy's own: the
+    /// table says what `quadwalk train` trains, and a rollout's policy is
+    /// the one given to run, so a different table would be ignored.
+    pub fn check_scene_residual(
+        &self,
+        scene_residual: Option<&ResidualConfig>,
+        source: &str,
+    ) -> Result<()> {
+        let Some(wanted) = scene_residual else {
+            return Ok(());
+        };
+        match self {
+            Self::Residual { driver, .. } if driver.config() == wanted => Ok(()),
+            _ => bail!(
+                "{source} [residual]: the table trains a lower-level policy with `quadwalk train`; the policy run here is the one given as the policy, which is not that residual policy (drop the table, or run the residual run itself)"
+            ),
+        }
     }
 
     /// The action for the task's next phase, given its observation (a

@@ -83,6 +83,11 @@ impl ResidualDriver {
         }
     }
 
+    /// Its settings.
+    pub fn config(&self) -> &ResidualConfig {
+        &self.config
+    }
+
     /// Forgets the episode (after the task's reset).
     pub fn reset(&mut self) {
         self.run = None;

@@ -66,6 +66,11 @@ impl Scene {
             Some(path) => Experiment::from_file(Path::new(path), &registry).map_err(value_error)?,
             None => Experiment::for_terrain(parse(terrain.unwrap_or(DEFAULT_TERRAIN))?),
         };
+        if let (Some(path), Some(_)) = (config, &experiment.residual) {
+            return Err(PyValueError::new_err(format!(
+                "config {path} [residual]: the Python environment steps whole phases; a lower-level residual policy is trained with `quadwalk train --config {path}`"
+            )));
+        }
         if let (Some(_), Some(spec)) = (config, terrain) {
             experiment.terrain = parse(spec)?;
         }

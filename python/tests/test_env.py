@@ -143,6 +143,10 @@ def test_bad_specs_configs_and_actions_raise_value_error(tmp_path):
     bad.write_text("[task]\nmax_phases = -3\n")
     with pytest.raises(ValueError, match="bad.toml"):
         quadwalk.make_env(config=bad)
+    lower = tmp_path / "lower.toml"
+    lower.write_text('[terrain]\nspec = "rigid"\n[residual]\nphase_policy = "scripted"\n')
+    with pytest.raises(ValueError, match=r"lower.toml \[residual\]: the Python environment steps whole phases"):
+        quadwalk.make_env(config=lower)
     env = quadwalk.make_env("rigid")
     env.reset(seed=0)
     with pytest.raises(ValueError, match="26 values"):

@@ -973,6 +973,35 @@ fn a_lower_level_residual_policy_trains_within_its_phase_policys_phases_and_runs
         s(&dir.join("eval")),
     ]);
     assert_eq!(e["episodes"][0]["distance_m"], moved["distance_m"], "{e}");
+    // its own config is its scene; another policy with that [residual]
+    // table would leave it unused, and is refused
+    let own = run.join("latest/config.toml");
+    json_of(&[
+        "rollout",
+        "--policy",
+        s(&run),
+        "--config",
+        s(&own),
+        "--phases",
+        "1",
+        "--json",
+    ]);
+    let err = failure(
+        &[
+            "rollout",
+            "--policy",
+            "scripted",
+            "--config",
+            s(&own),
+            "--phases",
+            "1",
+        ],
+        1,
+    );
+    assert!(
+        err.contains("[residual]") && err.contains("not that residual policy"),
+        "{err}"
+    );
     // a control rate that does not divide the phase is refused
     let bad = dir.join("bad.toml");
     std::fs::write(

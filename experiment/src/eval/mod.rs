@@ -124,6 +124,13 @@ impl<'a> EvalScene<'a> {
             &request.policy,
             request.stochastic.then_some(first_seed),
         )?;
+        policy.check_scene_residual(
+            experiment.residual.as_ref(),
+            &request
+                .config_path
+                .as_deref()
+                .map_or("the scene".to_string(), |p| p.display().to_string()),
+        )?;
         policy.fit_scene(&mut task, &mut physics, request.config_path.as_deref())?;
         task.max_phases = request.phases as usize;
         Ok(Self {

@@ -114,9 +114,8 @@ impl Policy {
                     learner.action_size()
                 );
             }
-            let phase_policy =
-                Self::from_arg(registry, &residual.phase_policy.to_string_lossy(), None)
-                    .with_context(|| format!("policy {arg}: [residual] phase_policy"))?;
+            let phase_policy = crate::residual::load_phase_policy(registry, &residual)
+                .with_context(|| format!("policy {arg}"))?;
             return Ok(Self::Residual {
                 learner,
                 driver: Box::new(ResidualDriver::new(residual, phase_policy)),

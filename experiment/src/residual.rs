@@ -2,14 +2,19 @@
 //! proposal for reacting while the ground moves): a frozen phase-level
 //! policy plans every phase as quadwalk's task does, and a lower-level
 //! policy moves each foot's target every `control_steps` physics steps
-//! (40 Hz by default) from what the robot measures. [`ResidualDriver`] runs
-//! it for one robot; `TaskEnv` trains through it and [`crate::policy`]
-//! evaluates with it, so training and evaluation step alike.
+//! (40 Hz by default) from what the robot measures. With `phase_policy =
+//! "none"` there is no phase level (the paper's second proposal, a
+//! single-level policy): each phase's plan holds the base and every foot
+//! where they are at its start, and the policy moves all four feet itself.
+//! [`ResidualDriver`] runs either for one robot; `TaskEnv` trains through
+//! it and [`crate::policy`] evaluates with it, so training and evaluation
+//! step alike.
 //!
 //! The lower-level observation ([`OBSERVATION_SIZE`] values, all in the
 //! base frame unless said): the phase's progress (1), the swing leg one-hot
 //! (4), the base's roll and pitch (2, rad), its angular velocity (3, rad/s)
-//! and linear velocity (3, m/s), the hip heights h_b (4, m), each foot's
+//! and linear velocity (3, m/s), the hip heights h_b (4, m), the goal the
+//! task observes in the base frame (2, m: x ahead, y left), each foot's
 //! planned position at the next step in the base's target frame (12, m),
 //! its measured position (12, m) and velocity (12, m/s), whether it
 //! touches the ground (4), and the previous action (12). What the feet
@@ -32,7 +37,9 @@ use crate::policy::Policy;
 use robot::snapshot::PhaseObserver;
 
 /// Values of the lower-level observation.
-pub const OBSERVATION_SIZE: usize = 69;
+pub const OBSERVATION_SIZE: usize = 71;
+/// `phase_policy = "none"`: no phase level (a single-level policy).
+pub const NO_PHASE_POLICY: &str = "none";
 /// Values of the lower-level action: an offset per foot and axis.
 pub const ACTION_SIZE: usize = 12;
 
@@ -47,9 +54,26 @@ pub fn fit_to_phase_policy(
     let Some(config) = &experiment.residual else {
         return Ok(());
     };
-    let phase_policy = Policy::from_arg(registry, &config.phase_policy.to_string_lossy(), None)
-        .context("[residual] phase_policy")?;
-    phase_policy.fit_scene(&mut experiment.task, &mut experiment.physics, None)
+    match load_phase_policy(registry, config)? {
+        Some(phase_policy) => {
+            phase_policy.fit_scene(&mut experiment.task, &mut experiment.physics, None)
+        }
+        None => Ok(()),
+    }
+}
+
+/// The phase policy `config` names (`None` for `"none"`: no phase level).
+pub fn load_phase_policy(
+    registry: &terrain_plugins::Registry,
+    config: &ResidualConfig,
+) -> Result<Option<Policy>> {
+    let name = config.phase_policy.to_string_lossy();
+    if name == NO_PHASE_POLICY {
+        return Ok(None);
+    }
+    Policy::from_arg(registry, &name, None)
+        .map(Some)
+        .context("[residual] phase_policy")
 }
 
 /// What one control step did.
@@ -67,14 +91,16 @@ pub struct ControlOutcome {
 /// way and the previous action.
 pub struct ResidualDriver {
     config: ResidualConfig,
-    phase_policy: Policy,
+    /// `None`: no phase level, each phase's plan holds still
+    phase_policy: Option<Policy>,
     run: Option<PhaseRun>,
     last_action: [f32; ACTION_SIZE],
 }
 
 impl ResidualDriver {
-    /// A driver with `phase_policy` planning the phases.
-    pub fn new(config: ResidualConfig, phase_policy: Policy) -> Self {
+    /// A driver with `phase_policy` planning the phases (`None`: plans that
+    /// hold still, the lower level moving every foot).
+    pub fn new(config: ResidualConfig, phase_policy: Option<Policy>) -> Self {
         Self {
             config,
             phase_policy,
@@ -99,9 +125,13 @@ impl ResidualDriver {
         self.run.is_some()
     }
 
-    /// The phase policy's action for the task's next phase.
+    /// The phase policy's action for the task's next phase (without a
+    /// phase level: the action whose plan is the squat's, all zeros).
     pub fn phase_action(&mut self, task: &Task, phase_obs: &[f32]) -> Result<Vec<f32>> {
-        self.phase_policy.action(task, phase_obs)
+        match &mut self.phase_policy {
+            Some(policy) => policy.action(task, phase_obs),
+            None => Ok(vec![0.0; robot::action::ACTION_SIZE]),
+        }
     }
 
     /// Plans the next phase with the phase policy from the task's
@@ -112,8 +142,13 @@ impl ResidualDriver {
         phase_obs: &[f32],
         observer: &mut dyn PhaseObserver,
     ) -> Result<()> {
-        let action = self.phase_policy.action(task, phase_obs)?;
-        self.run = Some(task.begin_phase(&action, observer));
+        self.run = Some(match &mut self.phase_policy {
+            Some(policy) => {
+                let action = policy.action(task, phase_obs)?;
+                task.begin_phase(&action, observer)
+            }
+            None => task.begin_phase_holding(observer),
+        });
         Ok(())
     }
 
@@ -193,6 +228,8 @@ impl ResidualDriver {
         values.extend((to_base * angular).iter());
         values.extend((to_base * linear).iter());
         values.extend(task.hip_heights_m());
+        let goal_xy_m = task.observed_goal_xy_m().unwrap_or(task.goal_xy_m());
+        values.extend(robot::controller::point_in_base(&pose, goal_xy_m).iter());
         for foot in planned {
             values.extend(foot.iter());
         }
@@ -248,7 +285,7 @@ mod tests {
             phase_policy: "scripted".into(),
             ..ResidualConfig::default()
         };
-        ResidualDriver::new(config, Policy::Scripted(ScriptedCrawl::default()))
+        ResidualDriver::new(config, Some(Policy::Scripted(ScriptedCrawl::default())))
     }
 
     #[test]
@@ -299,6 +336,53 @@ mod tests {
     }
 
     #[test]
+    fn without_a_phase_level_a_phase_holds_still_until_the_policy_moves_the_feet() {
+        // `phase_policy = "none"`: zero offsets for a phase leave the robot
+        // standing in its squat (base within 2 cm, feet within 1 cm, the
+        // same swing order in the history); 30 control steps a phase.
+        let mut task = task("rigid");
+        let mut phase_obs = vec![0.0; task.observation_size()];
+        task.reset(&mut phase_obs);
+        let config = ResidualConfig {
+            phase_policy: NO_PHASE_POLICY.into(),
+            max_offset_m: 0.15,
+            ..ResidualConfig::default()
+        };
+        let mut driver = ResidualDriver::new(config, None);
+        let base_start = task.world().base_pose().translation.vector;
+        let feet_start = task.world().feet_in_world_m();
+        let swing = task.swing_leg();
+        driver
+            .begin_phase(&mut task, &phase_obs, &mut NoObserver)
+            .unwrap();
+        let mut steps = 0;
+        let outcome = loop {
+            steps += 1;
+            let out = driver.control_step(
+                &mut task,
+                &[0.0; ACTION_SIZE],
+                &mut phase_obs,
+                &mut NoObserver,
+            );
+            if let Some(phase) = out.phase {
+                break phase;
+            }
+        };
+        assert_eq!(steps, 30);
+        assert!(outcome.termination.is_none(), "{outcome:?}");
+        let moved_m = (task.world().base_pose().translation.vector - base_start).norm();
+        assert!(moved_m < 0.02, "the base moved {moved_m} m");
+        for (now, start) in task.world().feet_in_world_m().iter().zip(feet_start) {
+            assert!((now - start).norm() < 0.01, "{now} from {start}");
+        }
+        assert_ne!(
+            task.swing_leg(),
+            swing,
+            "the next phase swings the next leg"
+        );
+    }
+
+    #[test]
     fn the_observation_reads_the_plan_and_the_feet_and_the_action_moves_them() {
         let mut task = task("elastic:2cm");
         let mut phase_obs = vec![0.0; task.observation_size()];
@@ -313,10 +397,12 @@ mod tests {
         // ones at the phase start (within 2 cm), no previous action
         assert_eq!(own[0], 0.0);
         assert_eq!(own[1..5].iter().sum::<f32>(), 1.0);
+        // the goal ahead (the default task's first goal is 2 m away)
+        assert!(own[17] > 1.0 && own[18].abs() < 0.3, "{own:?}");
         for k in 0..12 {
-            assert!((own[17 + k] - own[29 + k]).abs() < 0.02, "{k}: {own:?}");
+            assert!((own[19 + k] - own[31 + k]).abs() < 0.02, "{k}: {own:?}");
         }
-        assert!(own[57..].iter().all(|&a| a == 0.0));
+        assert!(own[59..].iter().all(|&a| a == 0.0));
         // every foot's target 3 cm lower (action -1 on z, bound 3 cm) for
         // one control step: the cost is offset_cost x 1/3 and the action is
         // the next observation's last block
@@ -328,6 +414,6 @@ mod tests {
         assert!((out.offset_reward + 0.02 / 3.0).abs() < 1e-9, "{out:?}");
         driver.observe(&task, &mut own);
         assert!((own[0] - 6.0 / 180.0).abs() < 1e-6);
-        assert_eq!(&own[57..], &action[..]);
+        assert_eq!(&own[59..], &action[..]);
     }
 }

@@ -18,7 +18,6 @@ use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
 
 use crate::config::Experiment;
-use crate::policy::Policy;
 use crate::residual::{self, ResidualDriver};
 use crate::scene::make_world;
 
@@ -127,14 +126,12 @@ impl TaskEnv {
         let residual = match &experiment.residual {
             None => None,
             Some(config) => {
-                let phase_policy = config.phase_policy.to_string_lossy();
                 let drivers = (0..envs)
                     .map(|_| {
-                        Policy::from_arg(registry, &phase_policy, None)
+                        residual::load_phase_policy(registry, config)
                             .map(|p| ResidualDriver::new(config.clone(), p))
                     })
-                    .collect::<Result<Vec<_>>>()
-                    .context("[residual] phase_policy")?;
+                    .collect::<Result<Vec<_>>>()?;
                 Some(Residual {
                     drivers,
                     phase_obs: vec![vec![0.0; task.observation_size()]; envs],

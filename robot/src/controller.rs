@@ -32,7 +32,7 @@
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-use crate::action::{ACTION_SIZE, PhaseCurves, SAMPLES_PER_PHASE, curves_from_action};
+use crate::action::{ACTION_SIZE, CubicBezier, PhaseCurves, SAMPLES_PER_PHASE, curves_from_action};
 use crate::kinematics::LegKinematics;
 use crate::model::{LegName, RobotModel};
 use crate::scripted::ScriptedCrawl;
@@ -411,6 +411,32 @@ impl PhaseController {
             feet_world_start_m: state.feet_in_world_m,
             feet_base_start_m,
             curves,
+        }
+    }
+
+    /// A plan for the phase about to run that holds the base and every
+    /// foot where they are (the swing leg's curve stays at its start): for
+    /// a lower level that moves all the feet itself (a single-level
+    /// policy). The phase counts in the history as any other.
+    pub fn hold_plan(&self, state: &RobotState) -> PhasePlan {
+        let swing = self.swing_leg();
+        let feet_base_start_m = state.feet_in_base_m();
+        let still = CubicBezier {
+            points: [Vector3::zeros(); 4],
+        };
+        PhasePlan {
+            phase: self.memory.phase,
+            swing_leg: swing,
+            base_start: state.base_pose,
+            feet_world_start_m: state.feet_in_world_m,
+            feet_base_start_m,
+            curves: PhaseCurves {
+                base_position: still,
+                base_orientation: still,
+                swing_foot: CubicBezier {
+                    points: [feet_base_start_m[swing.index()]; 4],
+                },
+            },
         }
     }
 

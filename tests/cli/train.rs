@@ -933,8 +933,8 @@ fn a_lower_level_residual_policy_trains_within_its_phase_policys_phases_and_runs
         resolved.contains("[residual]\nphase_policy = \"scripted\"\ncontrol_steps = 6\n"),
         "{resolved}"
     );
-    // the networks take the 69 lower-level values and give 12 offsets
-    assert_eq!(first_layer_shape(&run), serde_json::json!([69, 16]));
+    // the networks take the 71 lower-level values and give 12 offsets
+    assert_eq!(first_layer_shape(&run), serde_json::json!([71, 16]));
     let metrics = std::fs::read_to_string(run.join("metrics.jsonl")).unwrap();
     let first: Value = serde_json::from_str(metrics.lines().next().unwrap()).unwrap();
     assert_eq!(first["phases"], 120, "{first}");
@@ -1002,6 +1002,26 @@ fn a_lower_level_residual_policy_trains_within_its_phase_policys_phases_and_runs
         err.contains("[residual]") && err.contains("not that residual policy"),
         "{err}"
     );
+    // without a phase level (`none`) the policy moves every foot itself
+    let single = dir.join("single.toml");
+    let text = std::fs::read_to_string(&config).unwrap().replace(
+        "phase_policy = \"scripted\"\n",
+        "phase_policy = \"none\"\nmax_offset_m = 0.15\n",
+    );
+    std::fs::write(&single, text).unwrap();
+    let single_run = dir.join("single-run");
+    train_tiny(&single, &single_run, "1");
+    let r = json_of(&[
+        "rollout",
+        "--policy",
+        s(&single_run),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--json",
+    ]);
+    assert!(r["phases"].as_u64().unwrap() >= 1, "{r}");
     // a control rate that does not divide the phase is refused
     let bad = dir.join("bad.toml");
     std::fs::write(

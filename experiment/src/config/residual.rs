@@ -10,7 +10,9 @@
 //! phase_policy = "policies/tv2"    # the phase-level policy (a run, checkpoint
 //!                                  # or export, as --policy takes it, relative
 //!                                  # to where quadwalk runs); its observation,
-//!                                  # action prior and physics are the task's
+//!                                  # action prior and physics are the task's;
+//!                                  # "none": no phase level, the policy moves
+//!                                  # all four feet (a single-level policy)
 //! control_steps = 6                # physics steps per control step: 40 Hz,
 //!                                  # 30 per phase (must divide 180)
 //! max_offset_m = 0.03              # each foot's target moves at most this far
@@ -31,7 +33,9 @@ use serde::{Deserialize, Serialize};
 pub struct ResidualConfig {
     /// the phase-level policy that plans every phase: a run directory,
     /// checkpoint or exported policy, as `--policy` takes it (a relative
-    /// path from the directory quadwalk runs in)
+    /// path from the directory quadwalk runs in), `scripted`, or `none`
+    /// (no phase level: each phase holds still and the policy moves every
+    /// foot)
     pub phase_policy: PathBuf,
     /// physics steps per control step (240 Hz / control_steps); must divide
     /// the phase's 180
@@ -66,8 +70,12 @@ impl ResidualConfig {
                 self.control_steps
             );
         }
-        if !(self.max_offset_m.is_finite() && self.max_offset_m > 0.0 && self.max_offset_m <= 0.1) {
-            bail!("max_offset_m = {} must be in (0, 0.1] m", self.max_offset_m);
+        if !(self.max_offset_m.is_finite() && self.max_offset_m > 0.0 && self.max_offset_m <= 0.25)
+        {
+            bail!(
+                "max_offset_m = {} must be in (0, 0.25] m",
+                self.max_offset_m
+            );
         }
         if !(self.offset_cost.is_finite() && self.offset_cost >= 0.0) {
             bail!("offset_cost = {} must be >= 0", self.offset_cost);

@@ -65,6 +65,21 @@ impl Task {
         let plan = self
             .controller
             .plan_phase(action, &RobotState::of_world(&self.world));
+        self.begin_planned(plan, observer)
+    }
+
+    /// Begins a phase whose plan holds the base and every foot where they
+    /// are (`PhaseController::hold_plan`): a lower level moves them all
+    /// through [`Self::step_in_phase`]'s offsets.
+    pub fn begin_phase_holding(&mut self, observer: &mut dyn PhaseObserver) -> PhaseRun {
+        assert!(!self.episode.done, "reset the task after an episode ends");
+        let plan = self
+            .controller
+            .hold_plan(&RobotState::of_world(&self.world));
+        self.begin_planned(plan, observer)
+    }
+
+    fn begin_planned(&mut self, plan: PhasePlan, observer: &mut dyn PhaseObserver) -> PhaseRun {
         let goal_distance_prev_m = self.goal_in_base().norm();
         observer.phase_started(
             self,

@@ -404,9 +404,19 @@ impl PhaseController {
             self.squat_feet_in_base_m[swing.index()],
             swing.is_hind(),
         );
+        self.plan_with(state, feet_base_start_m, curves)
+    }
+
+    /// The plan of the phase about to run from `state` along `curves`.
+    fn plan_with(
+        &self,
+        state: &RobotState,
+        feet_base_start_m: [Vector3<f64>; 4],
+        curves: PhaseCurves,
+    ) -> PhasePlan {
         PhasePlan {
             phase: self.memory.phase,
-            swing_leg: swing,
+            swing_leg: self.swing_leg(),
             base_start: state.base_pose,
             feet_world_start_m: state.feet_in_world_m,
             feet_base_start_m,
@@ -419,25 +429,19 @@ impl PhaseController {
     /// a lower level that moves all the feet itself (a single-level
     /// policy). The phase counts in the history as any other.
     pub fn hold_plan(&self, state: &RobotState) -> PhasePlan {
-        let swing = self.swing_leg();
         let feet_base_start_m = state.feet_in_base_m();
         let still = CubicBezier {
             points: [Vector3::zeros(); 4],
         };
-        PhasePlan {
-            phase: self.memory.phase,
-            swing_leg: swing,
-            base_start: state.base_pose,
-            feet_world_start_m: state.feet_in_world_m,
-            feet_base_start_m,
-            curves: PhaseCurves {
-                base_position: still,
-                base_orientation: still,
-                swing_foot: CubicBezier {
-                    points: [feet_base_start_m[swing.index()]; 4],
-                },
-            },
-        }
+        let swing_foot = CubicBezier {
+            points: [feet_base_start_m[self.swing_leg().index()]; 4],
+        };
+        let curves = PhaseCurves {
+            base_position: still,
+            base_orientation: still,
+            swing_foot,
+        };
+        self.plan_with(state, feet_base_start_m, curves)
     }
 
     /// Writes the joint targets of control step `sample` (1 to

@@ -216,8 +216,8 @@ impl Policy {
     }
 
     /// The action for the task's next phase, given its observation (a
-    /// residual policy: its phase policy's; its own acts within the phase,
-    /// see [`Self::run_phase`]).
+    /// residual policy has none: it acts within the phase, see
+    /// [`Self::run_phase`]).
     pub fn action(&mut self, task: &Task, obs: &[f32]) -> Result<Vec<f32>> {
         Ok(match self {
             Self::Scripted(crawl) => crawl.act(task).to_vec(),
@@ -227,7 +227,9 @@ impl Policy {
                 ..
             } => learner.act_stochastic(obs, rng)?,
             Self::Trained { learner, .. } => learner.act_deterministic(obs)?,
-            Self::Residual { driver, .. } => driver.phase_action(task, obs)?,
+            Self::Residual { .. } => bail!(
+                "a residual policy acts within each phase at the control rate, not once per phase: run it with run_phase (as rollout, play and eval do)"
+            ),
         })
     }
 

@@ -120,20 +120,6 @@ impl ResidualDriver {
         self.last_action = [0.0; ACTION_SIZE];
     }
 
-    /// Whether a phase is under way.
-    pub fn in_phase(&self) -> bool {
-        self.run.is_some()
-    }
-
-    /// The phase policy's action for the task's next phase (without a
-    /// phase level: the action whose plan is the squat's, all zeros).
-    pub fn phase_action(&mut self, task: &Task, phase_obs: &[f32]) -> Result<Vec<f32>> {
-        match &mut self.phase_policy {
-            Some(policy) => policy.action(task, phase_obs),
-            None => Ok(vec![0.0; robot::action::ACTION_SIZE]),
-        }
-    }
-
     /// Plans the next phase with the phase policy from the task's
     /// phase-level observation `phase_obs`.
     pub fn begin_phase(

@@ -9,10 +9,12 @@
 //!
 //! - level before, L0: mean z_b over [at - 3 s, at); level after, L1: mean
 //!   over [at + 3 s, at + 6 s) (the gait's own oscillation averaged out);
-//! - excess dip: (L1 - min z_b over [at, at + 3 s)) - (L0 - min z_b over
-//!   [at - 3 s, at)): how much further below its level the base goes after
-//!   the change than it goes below it in the walk before (positive: a dip
-//!   beyond the gait's own);
+//! - excess dip: (min(L0, L1) - min z_b over [at, at + 3 s)) - (L0 - min
+//!   z_b over [at - 3 s, at)): how much further below the lower of the two
+//!   levels the base goes after the change than it goes below its level in
+//!   the walk before (positive: a dip beyond the gait's own; the lower
+//!   level, so that a base rising to a higher level after a stiffening is
+//!   not counted as dipping below it on its way up);
 //! - recovery time: with m(t) the moving mean of z_b over the last phase
 //!   (0.75 s: the base's swing with each step averages out) and the band
 //!   B = max |m(t) - L0| over [at - 3 s, at) + 5 mm (the walk's own wander
@@ -48,8 +50,8 @@ pub struct ChangeResponse {
     pub level_before_m: f64,
     /// L1: its mean height from 3 to 6 s after, m
     pub level_after_m: f64,
-    /// how much further below its level the base dipped after the change
-    /// than before it, m
+    /// how much further below the lower of its two levels the base dipped
+    /// after the change than below its level before it, m
     pub excess_dip_m: f64,
     /// how long the base's moving mean stayed outside its new level's
     /// band, s
@@ -100,7 +102,7 @@ impl ResponseTrace {
         let min = |a: f64, b: f64| within(a, b).map(|(_, z)| *z).fold(f64::INFINITY, f64::min);
         let level_before_m = mean(at - BEFORE_SECS, at)?;
         let level_after_m = mean(at + SETTLE_SECS, end)?;
-        let excess_dip_m = (level_after_m - min(at, at + SETTLE_SECS))
+        let excess_dip_m = (level_after_m.min(level_before_m) - min(at, at + SETTLE_SECS))
             - (level_before_m - min(at - BEFORE_SECS, at));
 
         // the moving mean over the window's last SMOOTHING_SECS, at each sample
@@ -228,6 +230,24 @@ mod tests {
         let dip = trace(0.3, 0.04).response(DT).unwrap();
         assert!((0.02..0.04).contains(&dip.excess_dip_m), "{dip:?}");
         assert!(dip.recovery_secs > fast.recovery_secs + 0.5, "{dip:?}");
+    }
+
+    #[test]
+    fn a_base_rising_to_a_higher_level_is_not_dipping() {
+        // the mirror of a slow settle: from 30 cm up to 33 cm
+        let mut rising = ResponseTrace::new(30.0);
+        for (t, z) in &trace(0.5, 0.0).samples {
+            rising.add(*t, 0.60 - z);
+        }
+        let r = rising.response(DT).unwrap();
+        assert!(
+            (r.level_after_m - r.level_before_m - 0.03).abs() < 1e-3,
+            "{r:?}"
+        );
+        // no dip below the old level beyond the walk's own (the first
+        // troughs after the change are already on their way up)
+        assert!(r.excess_dip_m < 2e-3, "{r:?}");
+        assert!(r.recovery_secs > 0.9, "{r:?}");
     }
 
     #[test]

@@ -11,7 +11,7 @@ use learn::seeds::derive_seed;
 use learn::{StepResult, VecEnv};
 use rayon::prelude::*;
 use robot::action::ACTION_SIZE;
-use robot::snapshot::{NoObserver, PhaseObserver, PhaseStart};
+use robot::snapshot::{PhaseObserver, PhaseStart};
 use robot::task::{PhaseOutcome, RewardTerms, Task, TaskConfig};
 use robot::{RobotModel, WorldConfig};
 use terrain_plugins::{Registry, TerrainSpec};
@@ -44,26 +44,33 @@ impl EnvLogger {
     }
 }
 
-/// Times the observer calls of a logger.
-struct Timed<'a>(&'a mut EnvLogger);
+/// Times the observer calls of an environment's logger, if it has one
+/// (without one, nothing is told).
+struct Timed<'a>(Option<&'a mut EnvLogger>);
 
 impl PhaseObserver for Timed<'_> {
     fn phase_started(&mut self, task: &Task, start: &PhaseStart) {
-        let clock = Instant::now();
-        self.0.logger.phase_started(task, start);
-        self.0.secs += clock.elapsed().as_secs_f64();
+        if let Some(l) = &mut self.0 {
+            let clock = Instant::now();
+            l.logger.phase_started(task, start);
+            l.secs += clock.elapsed().as_secs_f64();
+        }
     }
 
     fn stepped(&mut self, task: &Task, step_in_phase: usize) {
-        let clock = Instant::now();
-        self.0.logger.stepped(task, step_in_phase);
-        self.0.secs += clock.elapsed().as_secs_f64();
+        if let Some(l) = &mut self.0 {
+            let clock = Instant::now();
+            l.logger.stepped(task, step_in_phase);
+            l.secs += clock.elapsed().as_secs_f64();
+        }
     }
 
     fn phase_ended(&mut self, task: &Task, outcome: &PhaseOutcome) {
-        let clock = Instant::now();
-        self.0.logger.phase_ended(task, outcome);
-        self.0.secs += clock.elapsed().as_secs_f64();
+        if let Some(l) = &mut self.0 {
+            let clock = Instant::now();
+            l.logger.phase_ended(task, outcome);
+            l.secs += clock.elapsed().as_secs_f64();
+        }
     }
 }
 
@@ -362,10 +369,11 @@ impl VecEnv for TaskEnv {
                         trunc,
                     )| {
                         let (policy_row, privileged_row) = obs_row.split_at_mut(o);
-                        let outcome = match logger {
-                            Some(l) => task.step_phase_observed(action, policy_row, &mut Timed(l)),
-                            None => task.step_phase_observed(action, policy_row, &mut NoObserver),
-                        };
+                        let outcome = task.step_phase_observed(
+                            action,
+                            policy_row,
+                            &mut Timed(logger.as_mut()),
+                        );
                         task.observe_privileged(privileged_row);
                         *reward = outcome.reward as f32;
                         for (slot, value) in terms.iter_mut().zip(outcome.terms.values()) {
@@ -413,12 +421,20 @@ fn begin_residual_episode(
     if let Some(l) = logger {
         l.log_reset(task);
     }
-    let begun = match logger {
-        Some(l) => driver.begin_phase(task, phase_row, &mut Timed(l)),
-        None => driver.begin_phase(task, phase_row, &mut NoObserver),
-    };
-    begun.expect("the phase policy acts on its own observation");
+    begin_residual_phase(task, driver, phase_row, logger);
     driver.observe(task, row);
+}
+
+/// The driver's next phase, planned from the phase-level observation.
+fn begin_residual_phase(
+    task: &mut Task,
+    driver: &mut ResidualDriver,
+    phase_row: &[f32],
+    logger: &mut Option<EnvLogger>,
+) {
+    driver
+        .begin_phase(task, phase_row, &mut Timed(logger.as_mut()))
+        .expect("the phase policy acts on its own observation");
 }
 
 /// One control step of every residual task (see [`crate::residual`]).
@@ -469,10 +485,8 @@ fn step_residual(
                     ),
                     (term, trunc),
                 )| {
-                    let outcome = match logger {
-                        Some(l) => driver.control_step(task, action, phase_row, &mut Timed(l)),
-                        None => driver.control_step(task, action, phase_row, &mut NoObserver),
-                    };
+                    let outcome =
+                        driver.control_step(task, action, phase_row, &mut Timed(logger.as_mut()));
                     *reward = outcome.reward as f32;
                     terms[0] = (outcome.reward - outcome.offset_reward) as f32;
                     terms[1] = outcome.offset_reward as f32;
@@ -485,11 +499,7 @@ fn step_residual(
                     *term = ended;
                     *trunc = cut;
                     if outcome.phase.is_some() && !ended && !cut {
-                        let begun = match logger {
-                            Some(l) => driver.begin_phase(task, phase_row, &mut Timed(l)),
-                            None => driver.begin_phase(task, phase_row, &mut NoObserver),
-                        };
-                        begun.expect("the phase policy acts on its own observation");
+                        begin_residual_phase(task, driver, phase_row, logger);
                     }
                     driver.observe(task, row);
                     if ended || cut {

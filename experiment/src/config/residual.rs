@@ -82,11 +82,6 @@ impl ResidualConfig {
         }
         Ok(())
     }
-
-    /// Control steps per phase.
-    pub fn steps_per_phase(&self) -> usize {
-        SAMPLES_PER_PHASE / self.control_steps
-    }
 }
 
 #[cfg(test)]
@@ -100,7 +95,6 @@ mod tests {
             ..ResidualConfig::default()
         };
         assert!(good.validate().is_ok());
-        assert_eq!(good.steps_per_phase(), 30);
         for (config, expected) in [
             (ResidualConfig::default(), "phase_policy is missing"),
             (

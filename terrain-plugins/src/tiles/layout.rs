@@ -181,8 +181,8 @@ impl FieldLayout {
                 tan: degrees.to_radians().tan(),
             }));
             let spring_at = |depth_m: f64| {
-                let k = TileParams::stiffness_n_per_m(depth_m, ctx);
-                (k, params.damping_n_s_per_m(k, ctx))
+                let s = params.spring(depth_m, ctx);
+                (s.stiffness_n_per_m, s.damping_n_s_per_m)
             };
             // What `terrain show` reports: for a range, the springs of its
             // middle depth.
@@ -297,12 +297,7 @@ impl FieldLayout {
                         max_depth_m,
                     } => {
                         let depth_m = depth_rng.random_range(min_depth_m..=max_depth_m);
-                        let k = TileParams::stiffness_n_per_m(depth_m, ctx);
-                        Some(TileSpring {
-                            depth_m,
-                            stiffness_n_per_m: k,
-                            damping_n_s_per_m: params.damping_n_s_per_m(k, ctx),
-                        })
+                        Some(params.spring(depth_m, ctx))
                     }
                     RegionModel::Soil {
                         model,

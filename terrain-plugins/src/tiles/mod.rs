@@ -451,12 +451,7 @@ impl Terrain for TiledTerrain {
             && !self.switched
         {
             if self.elapsed_secs >= switch.at_secs {
-                let k = TileParams::stiffness_n_per_m(switch.depth_m, &self.ctx);
-                let spring = TileSpring {
-                    depth_m: switch.depth_m,
-                    stiffness_n_per_m: k,
-                    damping_n_s_per_m: self.params.damping_n_s_per_m(k, &self.ctx),
-                };
+                let spring = self.params.spring(switch.depth_m, &self.ctx);
                 self.set_springs(world, Some(spring));
                 self.switched = true;
             }
@@ -656,12 +651,12 @@ impl Terrain for TiledTerrain {
     fn details(&self) -> Vec<String> {
         let mut lines = Vec::new();
         if let Some(switch) = self.switch {
-            let k = TileParams::stiffness_n_per_m(switch.depth_m, &self.ctx);
+            let spring = self.params.spring(switch.depth_m, &self.ctx);
             lines.push(format!(
                 "every tile switches to the spring of {} ({:.1} N/m, damping {:.1} N s/m) {} s after each reset",
                 crate::units::format_length(switch.depth_m),
-                k,
-                self.params.damping_n_s_per_m(k, &self.ctx),
+                spring.stiffness_n_per_m,
+                spring.damping_n_s_per_m,
                 switch.at_secs
             ));
         }

@@ -7,6 +7,7 @@ use crate::spec::{ParamDecl, ParamKind, ParamValue, TerrainSpec};
 use crate::units::format_length;
 
 use super::GROUND_FRICTION;
+use super::layout::TileSpring;
 
 /// Default extent of a field along x (its `length`), metres: room for 400
 /// phases (`quadwalk eval`'s default episode) of a 5 cm-per-phase gait from
@@ -195,6 +196,17 @@ impl TileParams {
     /// Spring stiffness (N/m) for a sinking depth under `ctx`'s standing robot.
     pub fn stiffness_n_per_m(depth_m: f64, ctx: &BuildContext) -> f64 {
         ctx.supported_mass_kg * ctx.gravity_m_per_s2 / (4.0 * depth_m)
+    }
+
+    /// The spring of a tile that sinks `depth_m` under a quarter of `ctx`'s
+    /// standing robot: k = m g / (4 d), damped with the damping ratio.
+    pub fn spring(&self, depth_m: f64, ctx: &BuildContext) -> TileSpring {
+        let k = Self::stiffness_n_per_m(depth_m, ctx);
+        TileSpring {
+            depth_m,
+            stiffness_n_per_m: k,
+            damping_n_s_per_m: self.damping_n_s_per_m(k, ctx),
+        }
     }
 
     /// Spring damping (N s/m) for a stiffness, see the module docs.

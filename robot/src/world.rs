@@ -446,6 +446,32 @@ impl World {
         })
     }
 
+    /// The mean hip (abduction joint) height above the mean surface height
+    /// under the feet that touch the ground (under all four feet when none
+    /// does), m: the base's height above what it stands on. Where the feet
+    /// have sunk the ground below them (soil) this is h_b plus the holes'
+    /// depth; on rigid flat ground it is h_b.
+    pub fn base_height_above_feet_m(&self) -> f64 {
+        let base = self.base_pose();
+        let hips_z_m = self
+            .legs()
+            .iter()
+            .map(|leg| (base * Point3::from(leg.abduction_m)).z)
+            .sum::<f64>()
+            / 4.0;
+        let feet = self.feet_in_world_m();
+        let touching = self.feet_touching_ground();
+        let standing = touching.iter().any(|&t| t);
+        let (sum_m, count) = feet
+            .iter()
+            .zip(touching)
+            .filter(|(_, touches)| *touches || !standing)
+            .fold((0.0, 0usize), |(sum, n), (foot, _)| {
+                (sum + self.surface_height_m(foot.x, foot.y), n + 1)
+            });
+        hips_z_m - sum_m / count as f64
+    }
+
     /// The inclination of the rest surface under the robot along its
     /// heading, radians, in the sense of the base's pitch (nalgebra's Euler
     /// pitch, about y: a base lying on ground that rises ahead has a

@@ -21,6 +21,10 @@
 //! pitch_reference = "world"      # the paper's: the pitch termination measures from
 //!                                # the horizontal; "ground": from the rest surface's
 //!                                # inclination under the robot (slopes, hills)
+//! base_height_reference = "hips" # the paper's: the base-height termination and R_s
+//!                                # measure h_b, from the ground right below each hip;
+//!                                # "feet": from the ground under the feet that touch
+//!                                # it (soil, where the feet stand in their own holes)
 //! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
 //!                                # action is a residual on the crawl (+27 observations)
 //!
@@ -163,6 +167,49 @@ impl PitchReference {
     }
 }
 
+/// What the base-height termination and the height term R_s measure the
+/// hips' height from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub enum BaseHeightReference {
+    /// The paper's: h_b, each hip's height above the terrain right below
+    /// it, averaged over the four hips.
+    #[default]
+    Hips,
+    /// The mean hip height above the mean surface under the feet that touch
+    /// the ground (all four feet when none does; see
+    /// `World::base_height_above_feet_m`). On ground that stays down the
+    /// feet stand in holes of their own making while the ground below the
+    /// hips is untouched, so h_b counts the holes' depth as a fall; this
+    /// measures the base from what it stands on. On rigid flat ground both
+    /// are the hips' height.
+    Feet,
+}
+
+impl BaseHeightReference {
+    /// Whether this is the paper's reference, the ground below the hips.
+    pub fn is_hips(&self) -> bool {
+        *self == Self::Hips
+    }
+
+    /// The name used in configuration files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Hips => "hips",
+            Self::Feet => "feet",
+        }
+    }
+
+    /// Parses [`Self::name`]'s output.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "hips" => Some(Self::Hips),
+            "feet" => Some(Self::Feet),
+            _ => None,
+        }
+    }
+}
+
 /// What a policy's action is added to (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(try_from = "String", into = "String")]
@@ -226,7 +273,8 @@ pub struct TaskConfig {
     pub start_x_range_m: (f64, f64),
     /// start y is drawn uniformly from this range, m
     pub start_y_range_m: (f64, f64),
-    /// termination: mean hip height below this, m
+    /// termination: the base height (as `base_height_reference` measures
+    /// it; the paper's: the mean of h_b) below this, m
     pub min_base_height_m: f64,
     /// termination: |pitch| above this, degrees
     pub max_pitch_deg: f64,
@@ -235,6 +283,10 @@ pub struct TaskConfig {
     /// from before it existed read back byte for byte)
     #[serde(skip_serializing_if = "PitchReference::is_world")]
     pub pitch_reference: PitchReference,
+    /// what the base-height termination and R_s measure the hips' height
+    /// from (left out of a written file when it is the paper's)
+    #[serde(skip_serializing_if = "BaseHeightReference::is_hips")]
+    pub base_height_reference: BaseHeightReference,
     /// the reward of a terminated phase
     pub termination_reward: f64,
     /// after a reset the robot stands this long holding the squat, so that
@@ -383,6 +435,7 @@ impl Default for TaskConfig {
             min_base_height_m: 0.20,
             max_pitch_deg: 15.0,
             pitch_reference: PitchReference::default(),
+            base_height_reference: BaseHeightReference::default(),
             termination_reward: -10.0,
             observation: ObservationConfig::default(),
             settle_secs: 0.5,
@@ -444,6 +497,23 @@ impl From<PitchReference> for String {
     }
 }
 
+impl TryFrom<String> for BaseHeightReference {
+    type Error = TaskConfigError;
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        Self::from_name(&name).ok_or_else(|| {
+            TaskConfigError(format!(
+                "base_height_reference must be \"hips\" (the paper's) or \"feet\", got {name:?}"
+            ))
+        })
+    }
+}
+
+impl From<BaseHeightReference> for String {
+    fn from(value: BaseHeightReference) -> Self {
+        value.name().to_string()
+    }
+}
+
 impl TryFrom<String> for ActionPrior {
     type Error = TaskConfigError;
     fn try_from(name: String) -> Result<Self, Self::Error> {
@@ -481,6 +551,7 @@ mod tests {
             balance_terms: BalanceTerms::Penalty,
             action_prior: ActionPrior::ScriptedCrawl,
             pitch_reference: PitchReference::Ground,
+            base_height_reference: BaseHeightReference::Feet,
             observation: ObservationConfig {
                 foot_history_phases: 2,
                 goal_line_ahead_m: Some(1.0),
@@ -500,6 +571,7 @@ mod tests {
             "foot_history_phases",
             "goal_line_ahead_m",
             "pitch_reference",
+            "base_height_reference",
         ] {
             assert!(!plain.contains(key), "{key} in {plain}");
         }
@@ -534,6 +606,10 @@ mod tests {
             (
                 "pitch_reference = \"slope\"",
                 "pitch_reference must be \"world\" (the paper's) or \"ground\", got \"slope\"",
+            ),
+            (
+                "base_height_reference = \"base\"",
+                "base_height_reference must be \"hips\" (the paper's) or \"feet\", got \"base\"",
             ),
             (
                 "distance_reward = \"backward\"",

@@ -117,7 +117,8 @@ mod reward;
 mod termination;
 
 pub use config::{
-    ActionPrior, BalanceTerms, DistanceReward, PitchReference, TaskConfig, TaskConfigError,
+    ActionPrior, BalanceTerms, BaseHeightReference, DistanceReward, PitchReference, TaskConfig,
+    TaskConfigError,
 };
 pub use observation::{FOOT_HISTORY_PHASES, ObservationConfig};
 pub use phase::PhaseRun;
@@ -400,9 +401,21 @@ impl Task {
         feet_in_base_m(&self.world.base_pose(), self.world.feet_in_world_m())
     }
 
-    /// The base height the reward and termination use: the mean of h_b, m.
+    /// The mean of h_b, m: the base height of the statistics (Table I's
+    /// mu(h_b) and sigma(h_b)) and, with the paper's
+    /// `base_height_reference`, of the reward and termination.
     pub fn base_height_m(&self) -> f64 {
         self.world.base_height_m()
+    }
+
+    /// The base height the termination and the height term R_s judge, m:
+    /// `hips_mean_m` (the mean of h_b, [`Self::base_height_m`]) with the
+    /// paper's reference, the height above the feet's ground with `feet`.
+    pub(super) fn judged_base_height_m(&self, hips_mean_m: f64) -> f64 {
+        match self.config.base_height_reference {
+            BaseHeightReference::Hips => hips_mean_m,
+            BaseHeightReference::Feet => self.world.base_height_above_feet_m(),
+        }
     }
 
     /// h_b: height of each hip (abduction) joint above the terrain right below it.
@@ -450,7 +463,7 @@ impl Task {
 pub(crate) mod tests {
     use std::sync::Arc;
 
-    use nalgebra::{Isometry3, Vector3};
+    use nalgebra::{Isometry3, Point3, Vector3};
     use terrain_plugins::{BuildContext, Registry};
 
     use super::*;
@@ -771,6 +784,91 @@ pub(crate) mod tests {
         // level ground at rest: no inclination, tiles included
         let task = task_on("elastic:5cm", TaskConfig::default(), 0);
         assert_eq!(task.world().ground_pitch_rad(), 0.0);
+    }
+
+    #[test]
+    fn with_the_feet_reference_the_base_is_measured_from_the_holes_the_feet_stand_in() {
+        // Rigid flat ground: both references give the hips' height.
+        let mut obs = vec![0.0; 102];
+        let mut task = task_on("rigid", TaskConfig::default(), 0);
+        task.reset(&mut obs);
+        let (hips, feet) = (
+            task.base_height_m(),
+            task.world().base_height_above_feet_m(),
+        );
+        assert!((hips - feet).abs() < 1e-9, "{hips} vs {feet}");
+
+        // Soil: the crawl's feet dig holes that stay, the ground below the
+        // hips stays up.
+        let mut task = task_on(
+            "soil:4cm",
+            TaskConfig {
+                min_base_height_m: 0.01,
+                ..TaskConfig::default()
+            },
+            0,
+        );
+        task.reset(&mut obs);
+        let crawl = ScriptedCrawl::default();
+        for _ in 0..8 {
+            let out = task.step_phase(&crawl.act(&task), &mut obs);
+            assert!(out.termination.is_none(), "{out:?}");
+        }
+        let world = task.world();
+        let (hips, feet) = (task.base_height_m(), world.base_height_above_feet_m());
+        // what the feet stand on: the measure is the hips' mean height above
+        // the soles of the feet that touch the ground (a sole rests on its
+        // tile's top up to the contact's penetration)
+        let base = world.base_pose();
+        let hips_z_m = world
+            .legs()
+            .iter()
+            .map(|leg| (base * Point3::from(leg.abduction_m)).z)
+            .sum::<f64>()
+            / 4.0;
+        let touching = world.feet_touching_ground();
+        let radius_m = world.model().legs[0].foot_radius_m;
+        let soles: Vec<f64> = world
+            .feet_in_world_m()
+            .iter()
+            .zip(touching)
+            .filter(|(_, t)| *t)
+            .map(|(foot, _)| foot.z - radius_m)
+            .collect();
+        assert!(soles.len() >= 2, "{touching:?}");
+        let above_soles = hips_z_m - soles.iter().sum::<f64>() / soles.len() as f64;
+        assert!(
+            (feet - above_soles).abs() < 0.005,
+            "{feet} vs {above_soles}"
+        );
+        // the holes under the standing feet are deeper than the soil's
+        // standing sink, and h_b counts them as a lower base
+        let holes_m: Vec<f64> = world
+            .feet_in_world_m()
+            .iter()
+            .zip(touching)
+            .filter(|(_, t)| *t)
+            .map(|(f, _)| world.rest_height_m(f.x, f.y) - world.surface_height_m(f.x, f.y))
+            .collect();
+        let mean_hole_m = holes_m.iter().sum::<f64>() / holes_m.len() as f64;
+        assert!(mean_hole_m > 0.04, "{holes_m:?}");
+        assert!(feet - hips > 0.02, "hips {hips} feet {feet}");
+
+        // A limit between the two: the paper's reference calls it a fall,
+        // the feet's does not.
+        task.config.min_base_height_m = 0.5 * (hips + feet);
+        for (reference, falls) in [
+            (BaseHeightReference::Hips, true),
+            (BaseHeightReference::Feet, false),
+        ] {
+            task.config.base_height_reference = reference;
+            let termination = task.check_termination(task.judged_base_height_m(hips));
+            assert_eq!(
+                matches!(termination, Some(Termination::BaseTooLow { .. })),
+                falls,
+                "{reference:?}: {termination:?}"
+            );
+        }
     }
 
     #[test]

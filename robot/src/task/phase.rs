@@ -136,7 +136,7 @@ impl Task {
             run.height_range_m.0.min(height),
             run.height_range_m.1.max(height),
         );
-        run.termination = self.check_termination(height);
+        run.termination = self.check_termination(self.judged_base_height_m(height));
         observer.stepped(self, i);
         !run.finished()
     }
@@ -202,7 +202,7 @@ impl Task {
                     let heading = self.heading_target_in_base();
                     RewardTerms::orientation_term(heading.y.atan2(heading.x))
                 },
-                height: RewardTerms::height_term(self.base_height_m()),
+                height: RewardTerms::height_term(self.judged_base_height_m(self.base_height_m())),
                 torque: RewardTerms::torque_term(torque_norm_sum / steps as f64),
                 roll: RewardTerms::roll_term(roll),
             }

@@ -7,7 +7,8 @@ use super::Task;
 /// Why an episode ended early.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Termination {
-    /// mean hip height below the minimum
+    /// the base height (as `base_height_reference` measures it) below the
+    /// minimum
     BaseTooLow {
         /// the height, m
         height_m: f64,

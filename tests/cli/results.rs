@@ -120,6 +120,80 @@ fn a_tiny_plan_writes_table_one_fig_four_the_matrix_and_the_ablations() {
 }
 
 #[test]
+fn a_tiny_plan_puts_controllers_side_by_side_on_terrains_and_through_a_change() {
+    let dir = scratch_dir("results-controllers");
+    let rigid_policy = Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies/rigid");
+    let rigid_policy = s(&rigid_policy);
+    let plan = dir.join("plan.toml");
+    // the springs go from 2 cm to 5 cm 4 s after each reset; 14 phases
+    // (10.5 s after the 0.5 s settle) cover the response's window
+    std::fs::write(
+        &plan,
+        format!(
+            "[evaluation]\nepisodes = 1\nphases = 4\nseed_sets = [7, 9]\n\n[controllers]\nterrains = [\"rigid\"]\nchanges = [\"switch:2cm:5cm:4\"]\nchange_phases = 14\n\n[[controllers.row]]\nname = \"crawl\"\npolicy = \"scripted\"\n\n[[controllers.row]]\nname = \"phase level\"\npolicy = \"{rigid_policy}\"\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join("pages");
+    let run = quadwalk(&[
+        "results",
+        "--plan",
+        s(&plan),
+        "--out",
+        s(&out),
+        "--cache",
+        s(&dir.join("cache")),
+        "--threads",
+        "2",
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr).to_string();
+    assert!(run.status.success(), "{stderr}");
+    assert_eq!(
+        stderr.matches(" episodes x 4 phases").count(),
+        2,
+        "{stderr}"
+    );
+    assert_eq!(
+        stderr.matches(" episodes x 14 phases").count(),
+        2,
+        "{stderr}"
+    );
+    let page = std::fs::read_to_string(out.join("controllers.md")).unwrap();
+    assert!(page.contains("| controller | policy | `rigid` |"), "{page}");
+    assert!(page.contains("| crawl | scripted | 2/2, "), "{page}");
+    assert!(
+        page.contains(&format!("| phase level | {rigid_policy} |")),
+        "{page}"
+    );
+    assert!(page.contains("Episodes of 14 phases."), "{page}");
+    // the crawl walks through the change on both seeds: a response each
+    assert!(
+        page.contains("| crawl | `switch:2cm:5cm:4` | 2/2 | -"),
+        "a softening lowers the base: {page}"
+    );
+    assert!(
+        page.contains(
+            "quadwalk eval --policy scripted --terrain switch:2cm:5cm:4 --episodes 1 --phases 14 --seed 9"
+        ),
+        "{page}"
+    );
+    assert_eq!(png_size(&out.join("controllers-response.png")), (1024, 640));
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let crawl_change = results
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["policy"] == "scripted" && c["terrain"] == "switch:2cm:5cm:4")
+        .unwrap();
+    assert_eq!(crawl_change["phases"], 14);
+    let profile = crawl_change["summary"]["change_response"]["mean_profile_m"]
+        .as_array()
+        .unwrap();
+    assert_eq!(profile.len(), 180, "9 s in bins of 0.05 s");
+}
+
+#[test]
 fn a_bad_plan_is_refused_with_its_name_and_what_is_wrong() {
     let dir = scratch_dir("results-bad");
     let plan = dir.join("plan.toml");

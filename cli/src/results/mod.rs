@@ -7,6 +7,7 @@
 //! | `fig4.png` | Fig. 4: h_b over the phase angle, one curve per scenario |
 //! | `matrix.md` | every policy on every terrain: success, speed, cost of transport, foot slip, falls |
 //! | `ablations.md`, `ablation-curves.png` | the observation ablations per variant and seed, learning curves |
+//! | `controllers.md`, `controllers-response.png` | controllers side by side: success and speed per terrain, the response to a terrain's change |
 //! | `results.json` | every evaluation's summary, machine-readable |
 //!
 //! Each (policy, terrain) pair is evaluated once over every seed set of the
@@ -15,6 +16,7 @@
 //! plan's evaluation settings stay the same (`--fresh` runs it again).
 
 mod ablation;
+mod controllers;
 mod matrix;
 mod paper_table;
 mod plan;
@@ -82,11 +84,12 @@ fn fingerprint(policy: &str) -> Result<String> {
     Ok(format!("{:016x}", learn::checkpoint::fnv1a64(&bytes)))
 }
 
-/// The `quadwalk eval` command that runs seed set `seed` of a cell.
-fn eval_command(policy: &str, terrain: &str, plan: &Plan, seed: u64) -> String {
+/// The `quadwalk eval` command that runs seed set `seed` of a cell of
+/// `phases` phases per episode.
+fn eval_command(policy: &str, terrain: &str, plan: &Plan, seed: u64, phases: u32) -> String {
     format!(
-        "quadwalk eval --policy {policy} --terrain {terrain} --episodes {} --phases {} --seed {seed} --threads 2",
-        plan.evaluation.episodes, plan.evaluation.phases
+        "quadwalk eval --policy {policy} --terrain {terrain} --episodes {} --phases {phases} --seed {seed} --threads 2",
+        plan.evaluation.episodes
     )
 }
 
@@ -98,40 +101,65 @@ struct Evaluations<'a> {
     done: BTreeMap<CellId, EvalReport>,
 }
 
-/// An evaluation: policy, terrain and the first seeds of its sets.
-type CellId = (String, String, Vec<u64>);
+/// An evaluation: policy, terrain, the first seeds of its sets and the
+/// phases of its episodes.
+type CellId = (String, String, Vec<u64>, u32);
 
-fn cell_id(policy: &str, terrain: &str, seed_sets: &[u64]) -> CellId {
-    (policy.to_string(), terrain.to_string(), seed_sets.to_vec())
+fn cell_id(policy: &str, terrain: &str, seed_sets: &[u64], phases: u32) -> CellId {
+    (
+        policy.to_string(),
+        terrain.to_string(),
+        seed_sets.to_vec(),
+        phases,
+    )
 }
 
 impl Evaluations<'_> {
     /// The evaluation of `policy` on `terrain` over the seed sets starting
-    /// at `seed_sets`.
-    fn get(&mut self, policy: &str, terrain: &str, seed_sets: &[u64]) -> Result<&EvalReport> {
-        let id = cell_id(policy, terrain, seed_sets);
+    /// at `seed_sets`, `phases` phases per episode.
+    fn get(
+        &mut self,
+        policy: &str,
+        terrain: &str,
+        seed_sets: &[u64],
+        phases: u32,
+    ) -> Result<&EvalReport> {
+        let id = cell_id(policy, terrain, seed_sets, phases);
         if !self.done.contains_key(&id) {
-            let report = self.run(policy, terrain, seed_sets)?;
+            let report = self.run(policy, terrain, seed_sets, phases)?;
             self.done.insert(id.clone(), report);
         }
         Ok(&self.done[&id])
     }
 
-    fn run(&self, policy: &str, terrain: &str, seed_sets: &[u64]) -> Result<EvalReport> {
+    fn run(
+        &self,
+        policy: &str,
+        terrain: &str,
+        seed_sets: &[u64],
+        phases: u32,
+    ) -> Result<EvalReport> {
         let key = CellKey {
             policy: policy.to_string(),
             policy_fingerprint: fingerprint(policy)?,
             terrain: terrain.to_string(),
             seeds: self.plan.seeds_of(seed_sets),
-            phases: self.plan.evaluation.phases,
+            phases,
         };
         let sets = seed_sets
             .iter()
             .map(u64::to_string)
             .collect::<Vec<_>>()
             .join("-");
+        // the plan's own phases keep the names of caches written before
+        // cells had phases of their own
+        let phases_tag = if phases == self.plan.evaluation.phases {
+            String::new()
+        } else {
+            format!("--{phases}ph")
+        };
         let dir = self.args.cache.join(format!(
-            "{}--{}--{}x{sets}",
+            "{}--{}--{}x{sets}{phases_tag}",
             slug(policy),
             slug(terrain),
             self.plan.evaluation.episodes
@@ -211,6 +239,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         )
     };
     let mut written = Vec::new();
+    let phases_all = plan.evaluation.phases;
 
     if let Some(s) = &plan.scenarios {
         let policies = [
@@ -229,7 +258,11 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
             let sets = &plan.evaluation.seed_sets;
             reports.insert(
                 scenario,
-                (policy, terrain, evals.get(policy, terrain, sets)?.clone()),
+                (
+                    policy,
+                    terrain,
+                    evals.get(policy, terrain, sets, phases_all)?.clone(),
+                ),
             );
         }
         let mut columns: [Option<&eval::summary::TerrainSummary>; 7] = [None; 7];
@@ -270,7 +303,11 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         for (scenario, _) in paper_table::SCENARIO_TERRAINS {
             let (policy, terrain, _) = &reports[scenario];
             for &seed in &plan.evaluation.seed_sets {
-                let _ = writeln!(page, "{}", eval_command(policy, terrain, &plan, seed));
+                let _ = writeln!(
+                    page,
+                    "{}",
+                    eval_command(policy, terrain, &plan, seed, phases_all)
+                );
             }
         }
         page.push_str("```\n");
@@ -302,7 +339,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         let sets = plan.matrix_seed_sets();
         for p in &m.policies {
             for t in &m.terrains {
-                evals.get(p, t, sets)?;
+                evals.get(p, t, sets, phases_all)?;
             }
         }
         let cells: Vec<matrix::Cell> = m
@@ -312,8 +349,11 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
             .map(|(p, t)| matrix::Cell {
                 policy: p,
                 terrain: t,
-                report: &evals.done[&cell_id(p, t, sets)],
-                commands: sets.iter().map(|&s| eval_command(p, t, &plan, s)).collect(),
+                report: &evals.done[&cell_id(p, t, sets, phases_all)],
+                commands: sets
+                    .iter()
+                    .map(|&s| eval_command(p, t, &plan, s, phases_all))
+                    .collect(),
             })
             .collect();
         let mut page = header("Every policy on every terrain", plan.matrix_seed_sets());
@@ -324,7 +364,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
     if !plan.ablation.is_empty() {
         let sets = &plan.evaluation.seed_sets;
         for r in &plan.ablation {
-            evals.get(&r.policy, &r.terrain, sets)?;
+            evals.get(&r.policy, &r.terrain, sets, phases_all)?;
         }
         let runs: Vec<ablation::Run> = plan
             .ablation
@@ -333,7 +373,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
                 variant: &r.variant,
                 seed: r.seed,
                 policy: &r.policy,
-                report: &evals.done[&cell_id(&r.policy, &r.terrain, sets)],
+                report: &evals.done[&cell_id(&r.policy, &r.terrain, sets, phases_all)],
             })
             .collect();
         let mut page = header("Observation ablations", &plan.evaluation.seed_sets);
@@ -341,7 +381,11 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         page.push_str("\n![learning curves](ablation-curves.png)\n\nThe commands (one per seed set):\n\n```sh\n");
         for r in &plan.ablation {
             for &seed in &plan.evaluation.seed_sets {
-                let _ = writeln!(page, "{}", eval_command(&r.policy, &r.terrain, &plan, seed));
+                let _ = writeln!(
+                    page,
+                    "{}",
+                    eval_command(&r.policy, &r.terrain, &plan, seed, phases_all)
+                );
             }
         }
         page.push_str("```\n");
@@ -351,10 +395,72 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         written.push(path);
     }
 
+    if let Some(c) = &plan.controllers {
+        let sets = &plan.evaluation.seed_sets;
+        let change_phases = plan.change_phases();
+        let runs: Vec<(&str, &str, u32)> = c
+            .terrains
+            .iter()
+            .map(|t| (t.as_str(), phases_all))
+            .chain(c.changes.iter().map(|t| (t.as_str(), change_phases)))
+            .flat_map(|(t, phases)| c.row.iter().map(move |r| (r.policy.as_str(), t, phases)))
+            .collect();
+        for &(policy, terrain, phases) in &runs {
+            evals.get(policy, terrain, sets, phases)?;
+        }
+        let rows: Vec<(&str, &str)> = c
+            .row
+            .iter()
+            .map(|r| (r.name.as_str(), r.policy.as_str()))
+            .collect();
+        let cells: Vec<controllers::Cell> = c
+            .row
+            .iter()
+            .flat_map(|r| {
+                c.terrains
+                    .iter()
+                    .map(|t| (t, phases_all))
+                    .chain(c.changes.iter().map(|t| (t, change_phases)))
+                    .map(move |(t, phases)| (r, t, phases))
+            })
+            .map(|(r, t, phases)| controllers::Cell {
+                name: &r.name,
+                terrain: t,
+                report: &evals.done[&cell_id(&r.policy, t, sets, phases)],
+            })
+            .collect();
+        let mut page = header("Controllers side by side", sets);
+        if !c.terrains.is_empty() {
+            page.push_str(&controllers::terrain_table(&rows, &c.terrains, &cells));
+        }
+        if !c.changes.is_empty() {
+            let _ = write!(
+                page,
+                "\n## The response to a change of the terrain\n\nEpisodes of {change_phases} phases.\n\n{}\n![the mean response](controllers-response.png)\n",
+                controllers::response_table(&rows, &c.changes, &cells)
+            );
+            let path = out_dir.join("controllers-response.png");
+            controllers::response_png(&path, &rows, &c.changes, &cells)?;
+            written.push(path);
+        }
+        page.push_str("\nThe commands (one per seed set):\n\n```sh\n");
+        for &(policy, terrain, phases) in &runs {
+            for &seed in sets {
+                let _ = writeln!(
+                    page,
+                    "{}",
+                    eval_command(policy, terrain, &plan, seed, phases)
+                );
+            }
+        }
+        page.push_str("```\n");
+        write(&out_dir, "controllers.md", &page, &mut written)?;
+    }
+
     let summaries: Vec<serde_json::Value> = evals
         .done
         .iter()
-        .map(|((policy, terrain, sets), r)| {
+        .map(|((policy, terrain, sets, phases), r)| {
             // Fig. 4's 360 bins per terrain type stay in the cached eval.json
             let mut summary = serde_json::to_value(&r.summary)?;
             if let Some(types) = summary
@@ -369,7 +475,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
                 "policy": policy,
                 "terrain": terrain,
                 "seeds": plan.seeds_of(sets),
-                "phases": plan.evaluation.phases,
+                "phases": phases,
                 "summary": summary,
             }))
         })

@@ -23,6 +23,14 @@
 //! seed = 0
 //! policy = "policies/elastic-5cm"
 //! terrain = "elastic:5cm"
+//!
+//! [controllers]                            # controllers side by side (issue 42)
+//! terrains = ["varying:2m:2,3,4,5cm,rigid", "soil:4cm"]
+//! changes = ["switch:2cm:5cm:30"]          # terrains that change mid-episode
+//! change_phases = 60                       # optional: phases of those episodes
+//! [[controllers.row]]
+//! name = "phase level"
+//! policy = "policies/tv2"
 //! ```
 //!
 //! Policy paths are relative to the directory `quadwalk results` runs in
@@ -48,6 +56,9 @@ pub struct Plan {
     /// the observation ablations, one entry per trained policy
     #[serde(default)]
     pub ablation: Vec<AblationRun>,
+    /// controllers side by side on terrains and through a change of the
+    /// terrain
+    pub controllers: Option<ControllersPlan>,
 }
 
 /// `[evaluation]`.
@@ -105,6 +116,34 @@ pub struct AblationRun {
     pub terrain: String,
 }
 
+/// `[controllers]`: controllers (phase level, residual, single level)
+/// side by side.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllersPlan {
+    /// the rows
+    pub row: Vec<ControllerRow>,
+    /// the terrains of the success and speed table
+    pub terrains: Vec<String>,
+    /// terrains that change by themselves mid-episode (`switch:...`): the
+    /// response table and figure
+    #[serde(default)]
+    pub changes: Vec<String>,
+    /// phases of each episode on `changes` (`None`: `[evaluation]`'s); the
+    /// response needs the change's time plus 6 s
+    pub change_phases: Option<u32>,
+}
+
+/// `[[controllers.row]]`: one controller.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerRow {
+    /// what the row is called (`phase level`, `residual`)
+    pub name: String,
+    /// its policy
+    pub policy: String,
+}
+
 impl Plan {
     /// Reads and checks the plan at `path`: every spec parses with
     /// `registry`, every count is positive, every policy path exists.
@@ -148,8 +187,14 @@ impl Plan {
         if let Some(sets) = self.matrix.as_ref().and_then(|m| m.seed_sets.as_ref()) {
             check_sets("matrix.seed_sets", sets)?;
         }
-        if self.scenarios.is_none() && self.matrix.is_none() && self.ablation.is_empty() {
-            bail!("the plan has no [scenarios], [matrix] or [[ablation]]: nothing to evaluate");
+        if self.scenarios.is_none()
+            && self.matrix.is_none()
+            && self.ablation.is_empty()
+            && self.controllers.is_none()
+        {
+            bail!(
+                "the plan has no [scenarios], [matrix], [[ablation]] or [controllers]: nothing to evaluate"
+            );
         }
         let policy = |key: &str, p: &str| -> Result<()> {
             if p != "scripted" && !Path::new(p).exists() {
@@ -194,7 +239,48 @@ impl Plan {
             policy("ablation.policy", &run.policy)?;
             spec("ablation.terrain", &run.terrain)?;
         }
+        if let Some(c) = &self.controllers {
+            if c.row.is_empty() || (c.terrains.is_empty() && c.changes.is_empty()) {
+                bail!(
+                    "[controllers] needs at least one [[controllers.row]] and one terrain or change"
+                );
+            }
+            for row in &c.row {
+                if row.name.trim().is_empty() {
+                    bail!(
+                        "[[controllers.row]] with policy {:?}: name is empty",
+                        row.policy
+                    );
+                }
+                policy("controllers.row.policy", &row.policy)?;
+            }
+            for t in &c.terrains {
+                spec("controllers.terrains", t)?;
+            }
+            for t in &c.changes {
+                spec("controllers.changes", t)?;
+                let terrain = registry
+                    .create(t, &terrain_plugins::BuildContext::default())
+                    .with_context(|| format!("controllers.changes = {t:?}"))?;
+                if terrain.change_times_secs().is_empty() {
+                    bail!(
+                        "controllers.changes = {t:?}: this terrain never changes by itself (a change is e.g. switch:2cm:5cm:30)"
+                    );
+                }
+            }
+            if c.change_phases == Some(0) {
+                bail!("controllers.change_phases = 0: must be at least 1");
+            }
+        }
         Ok(())
+    }
+
+    /// The phases of each episode on the controllers' changing terrains.
+    pub fn change_phases(&self) -> u32 {
+        self.controllers
+            .as_ref()
+            .and_then(|c| c.change_phases)
+            .unwrap_or(self.evaluation.phases)
     }
 
     /// The seeds of `sets`, set by set.
@@ -237,6 +323,12 @@ mod tests {
         )
         .unwrap();
         assert_eq!(own.matrix_seed_sets(), [40]);
+        let controllers = parse(
+            "[evaluation]\nepisodes = 2\nphases = 3\nseed_sets = [10]\n[controllers]\nterrains = [\"rigid\"]\nchanges = [\"switch:2cm:5cm:30\"]\nchange_phases = 60\n[[controllers.row]]\nname = \"crawl\"\npolicy = \"scripted\"\n",
+        )
+        .unwrap();
+        assert_eq!(controllers.change_phases(), 60);
+        assert_eq!(controllers.controllers.unwrap().row[0].name, "crawl");
         assert_eq!(own.seeds_of(own.matrix_seed_sets()), [40, 41]);
     }
 
@@ -262,6 +354,17 @@ mod tests {
             "{base}seed_sets = [1]\n[matrix]\npolicies = [\"scripted\"]\nterrains = [\"marsh:5cm\"]\n"
         ));
         assert!(e.contains("marsh:5cm"), "{e}");
+        let controllers = |body: &str| {
+            err(&format!(
+                "{base}seed_sets = [1]\n[controllers]\n{body}\n[[controllers.row]]\nname = \"crawl\"\npolicy = \"scripted\"\n"
+            ))
+        };
+        let e = controllers("terrains = [\"rigid\"]\nchanges = [\"elastic:5cm\"]");
+        assert!(e.contains("never changes by itself"), "{e}");
+        let e = controllers("terrains = []");
+        assert!(e.contains("one terrain or change"), "{e}");
+        let e = controllers("changes = [\"switch:2cm:5cm:30\"]\nchange_phases = 0");
+        assert!(e.contains("change_phases = 0"), "{e}");
         let e = err(&format!("{base}seed_sets = [1]\nepisodez = 3\n{matrix}"));
         assert!(e.contains("episodez"), "unknown keys are refused: {e}");
     }

@@ -23,6 +23,10 @@
 //!   mean lags by up to a phase, so a base that settles at once scores up
 //!   to ~0.75 s.
 //!
+//! - profile: z_b - L0 in bins of [`PROFILE_BIN_SECS`] over the whole
+//!   window, for plotting responses beside each other (the summary averages
+//!   it over the episodes).
+//!
 //! An episode that falls or ends before at + 6 s has no response (its fall
 //! is in its record).
 
@@ -40,9 +44,22 @@ pub const LEVEL_SECS: f64 = 3.0;
 pub const SMOOTHING_SECS: f64 = 0.75;
 /// What the recovery band adds to the walk's own wander, m.
 pub const TOLERANCE_M: f64 = 0.005;
+/// The width of a profile's bins, s (12 physics steps).
+pub const PROFILE_BIN_SECS: f64 = 0.05;
+
+/// The number of bins of a profile: the window from `at - BEFORE_SECS` to
+/// `at + SETTLE_SECS + LEVEL_SECS`.
+pub fn profile_bins() -> usize {
+    ((BEFORE_SECS + SETTLE_SECS + LEVEL_SECS) / PROFILE_BIN_SECS).round() as usize
+}
+
+/// The time of bin `i`'s centre, s from the change.
+pub fn profile_bin_secs(i: usize) -> f64 {
+    -BEFORE_SECS + (i as f64 + 0.5) * PROFILE_BIN_SECS
+}
 
 /// One episode's response to the terrain's change.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChangeResponse {
     /// when the terrain changed, s after its reset
     pub at_secs: f64,
@@ -56,6 +73,11 @@ pub struct ChangeResponse {
     /// how long the base's moving mean stayed outside its new level's
     /// band, s
     pub recovery_secs: f64,
+    /// z_b - L0, the mean of each [`PROFILE_BIN_SECS`] bin of the window
+    /// ([`profile_bins`] of them; bin i is centred at
+    /// [`profile_bin_secs`]`(i)` from the change), m
+    #[serde(default)]
+    pub profile_m: Vec<f64>,
 }
 
 /// The base heights of the window around a change, as an episode runs.
@@ -131,12 +153,25 @@ impl ResponseTrace {
             })
             .map(|(t, _)| t - at)
             .fold(0.0, f64::max);
+        let mut bins = vec![(0.0, 0usize); profile_bins()];
+        for (t, z) in &self.samples {
+            let i = ((t - (at - BEFORE_SECS)) / PROFILE_BIN_SECS).floor();
+            if let Some(bin) = bins.get_mut(i.max(0.0) as usize) {
+                bin.0 += z - level_before_m;
+                bin.1 += 1;
+            }
+        }
+        let profile_m = bins
+            .iter()
+            .map(|&(sum, n)| if n > 0 { sum / n as f64 } else { f64::NAN })
+            .collect();
         Some(ChangeResponse {
             at_secs: at,
             level_before_m,
             level_after_m,
             excess_dip_m,
             recovery_secs,
+            profile_m,
         })
     }
 }
@@ -156,6 +191,10 @@ pub struct ResponseSummary {
     pub excess_dip_m: Spread,
     /// recovery time, s
     pub recovery_secs: Spread,
+    /// the episodes' mean profile (z_b - L0 per bin, see
+    /// [`ChangeResponse::profile_m`]), m
+    #[serde(default)]
+    pub mean_profile_m: Vec<f64>,
 }
 
 impl ResponseSummary {
@@ -174,6 +213,20 @@ impl ResponseSummary {
             level_change_m: spread(&|r| r.level_after_m - r.level_before_m),
             excess_dip_m: spread(&|r| r.excess_dip_m),
             recovery_secs: spread(&|r| r.recovery_secs),
+            mean_profile_m: (0..profile_bins())
+                .map(|i| {
+                    let values: Vec<f64> = got
+                        .iter()
+                        .filter_map(|r| r.profile_m.get(i).copied())
+                        .filter(|v| v.is_finite())
+                        .collect();
+                    if values.is_empty() {
+                        f64::NAN
+                    } else {
+                        values.iter().sum::<f64>() / values.len() as f64
+                    }
+                })
+                .collect(),
         })
     }
 }
@@ -248,6 +301,35 @@ mod tests {
         // troughs after the change are already on their way up)
         assert!(r.excess_dip_m < 2e-3, "{r:?}");
         assert!(r.recovery_secs > 0.9, "{r:?}");
+    }
+
+    #[test]
+    fn the_profile_is_the_height_from_the_old_level_bin_by_bin_and_the_summary_averages_it() {
+        let r = trace(0.01, 0.0).response(DT).unwrap();
+        assert_eq!(r.profile_m.len(), profile_bins());
+        assert_eq!(profile_bins(), 180);
+        for (i, p) in r.profile_m.iter().enumerate() {
+            let t = profile_bin_secs(i);
+            // the walk's +-1 cm swing around 0 before, around -3 cm after
+            let level = if t < 0.0 { 0.0 } else { -0.03 };
+            if t.abs() > 0.1 {
+                assert!((p - level).abs() < 0.011, "bin {i} at {t} s: {p}");
+            }
+        }
+        // a bin averages its 12 steps: over the phase's swing the bins
+        // average to the level
+        let before: f64 = r.profile_m[..60].iter().sum::<f64>() / 60.0;
+        assert!(before.abs() < 1e-3, "{before}");
+        let summary = ResponseSummary::of(
+            Some(30.0),
+            &[Some(r.clone()), trace(0.5, 0.0).response(DT), None],
+        )
+        .unwrap();
+        let slow = trace(0.5, 0.0).response(DT).unwrap();
+        for i in 0..profile_bins() {
+            let mean = 0.5 * (r.profile_m[i] + slow.profile_m[i]);
+            assert!((summary.mean_profile_m[i] - mean).abs() < 1e-12);
+        }
     }
 
     #[test]

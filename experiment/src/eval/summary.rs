@@ -273,7 +273,7 @@ impl Summary {
                 episodes.iter().find_map(|e| e.terrain_change_secs),
                 &episodes
                     .iter()
-                    .map(|e| e.change_response)
+                    .map(|e| e.change_response.clone())
                     .collect::<Vec<_>>(),
             ),
         }

@@ -162,6 +162,27 @@ pub struct SceneArgs {
     robot: Option<PathBuf>,
 }
 
+/// `--task KEY=VALUE`: the task settings that judge a run.
+#[derive(Debug, Args)]
+pub struct TaskOverrideArgs {
+    /// A [task] setting on top of the scene's, as KEY=VALUE (repeatable; e.g.
+    /// base_height_reference=feet, min_base_height_m=0.15): the terminations
+    /// and rewards that judge the run. Not observation or action_prior (a
+    /// trained policy brings its own)
+    #[arg(long = "task", value_name = "KEY=VALUE")]
+    pub overrides: Vec<String>,
+}
+
+impl TaskOverrideArgs {
+    /// `experiment`'s task with the overrides on top.
+    pub fn apply(&self, experiment: &mut experiment::config::Experiment) -> Result<()> {
+        experiment.task =
+            experiment::config::apply_task_overrides(&experiment.task, &self.overrides)
+                .map_err(anyhow::Error::msg)?;
+        Ok(())
+    }
+}
+
 impl SceneArgs {
     /// The experiment these flags name: the config file, or the terrain
     /// spec (default `elastic:5cm`) with the default task.

@@ -42,6 +42,8 @@ pub struct RolloutArgs {
     policy: String,
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    task: crate::commands::TaskOverrideArgs,
     /// Phases to run (0.75 s each), unless the episode terminates first
     #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     phases: u32,
@@ -66,6 +68,8 @@ pub struct PlayArgs {
     checkpoint: Option<std::path::PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    task: crate::commands::TaskOverrideArgs,
     /// Phases to run (0.75 s each), unless the episode terminates first
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     phases: u32,
@@ -83,6 +87,7 @@ struct Run<'a> {
     command: &'static str,
     policy: &'a str,
     scene: &'a SceneArgs,
+    task: &'a crate::commands::TaskOverrideArgs,
     phases: u32,
     flags: &'a RunFlags,
     rerun: &'a RerunArgs,
@@ -98,6 +103,7 @@ pub fn rollout(registry: &Registry, args: &RolloutArgs) -> Result<()> {
             command: "rollout",
             policy: &args.policy,
             scene: &args.scene,
+            task: &args.task,
             phases: args.phases,
             flags: &args.flags,
             rerun: &args.rerun,
@@ -116,6 +122,7 @@ pub fn play(registry: &Registry, args: &PlayArgs) -> Result<()> {
             command: "play",
             policy: checkpoint.as_deref().unwrap_or(&args.policy),
             scene: &args.scene,
+            task: &args.task,
             phases: args.phases,
             flags: &args.flags,
             rerun: &args.rerun,
@@ -137,7 +144,8 @@ fn stats(values: &[f64]) -> serde_json::Value {
 
 fn run(registry: &Registry, args: &Run) -> Result<()> {
     args.video.check()?;
-    let experiment = args.scene.experiment(registry)?;
+    let mut experiment = args.scene.experiment(registry)?;
+    args.task.apply(&mut experiment)?;
     let mut policy = Policy::from_arg(
         registry,
         args.policy,

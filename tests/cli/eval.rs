@@ -182,6 +182,24 @@ fn a_fall_is_counted_by_cause_like_the_rollout_ends() {
         serde_json::json!([0, 0, 0, 0]),
         "no goal was reached"
     );
+    // the same limit as a --task setting over the terrain's task: the same
+    // falls, in eval and rollout, and the report names the setting
+    let out = scratch_dir("eval-fall-task");
+    let scene = ["--terrain", "rigid", "--task", "min_base_height_m=0.40"];
+    let mut args = vec!["--episodes", "2", "--phases", "5"];
+    args.extend_from_slice(&scene);
+    let t = eval_json(&args, &out);
+    assert_episodes_are_rollouts(&t, "scripted", &scene, "5");
+    assert_eq!(t["summary"]["falls_by_cause"]["base_too_low"], 2);
+    assert_eq!(t["episodes"], e["episodes"]);
+    assert_eq!(
+        t["task_overrides"],
+        serde_json::json!(["min_base_height_m=0.40"])
+    );
+    assert!(
+        e.get("task_overrides").is_none(),
+        "none given: none written"
+    );
 }
 
 /// The crawl on a 3 m field (tiles end at x = 1.5 m) walks off its end: a
@@ -259,6 +277,23 @@ fn bad_eval_input_is_refused_with_what_is_wrong() {
         err.contains("eval.json") && err.contains("no evaluation"),
         "{err}"
     );
+    for (setting, expected) in [
+        (
+            "base_height_reference=belly",
+            "base_height_reference must be \"hips\"",
+        ),
+        (
+            "observation.foot_velocity=false",
+            "observation sets the networks' input",
+        ),
+        ("max_phase=3", "unknown field `max_phase`"),
+    ] {
+        let err = failure(&["eval", "--terrain", "rigid", "--task", setting], 1);
+        assert!(
+            err.contains(&format!("--task {setting:?}")) && err.contains(expected),
+            "{err}"
+        );
+    }
     let err = failure(&["eval", "--terrain", "elastic:-5cm"], 1);
     assert!(
         err.contains("elastic:-5cm") || err.contains("-5cm"),

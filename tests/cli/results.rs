@@ -130,7 +130,7 @@ fn a_tiny_plan_puts_controllers_side_by_side_on_terrains_and_through_a_change() 
     std::fs::write(
         &plan,
         format!(
-            "[evaluation]\nepisodes = 1\nphases = 4\nseed_sets = [7, 9]\n\n[controllers]\nterrains = [\"rigid\"]\nchanges = [\"switch:2cm:5cm:4\"]\nchange_phases = 14\n\n[[controllers.row]]\nname = \"crawl\"\npolicy = \"scripted\"\n\n[[controllers.row]]\nname = \"phase level\"\npolicy = \"{rigid_policy}\"\n"
+            "[evaluation]\nepisodes = 1\nphases = 4\nseed_sets = [7, 9]\n\n[controllers]\nterrains = [\"rigid\"]\nchanges = [\"switch:2cm:5cm:4\"]\nchange_phases = 14\ntask = [\"base_height_reference=feet\"]\n\n[[controllers.row]]\nname = \"crawl\"\npolicy = \"scripted\"\n\n[[controllers.row]]\nname = \"phase level\"\npolicy = \"{rigid_policy}\"\n"
         ),
     )
     .unwrap();
@@ -173,7 +173,7 @@ fn a_tiny_plan_puts_controllers_side_by_side_on_terrains_and_through_a_change() 
     );
     assert!(
         page.contains(
-            "quadwalk eval --policy scripted --terrain switch:2cm:5cm:4 --episodes 1 --phases 14 --seed 9"
+            "quadwalk eval --policy scripted --terrain switch:2cm:5cm:4 --task base_height_reference=feet --episodes 1 --phases 14 --seed 9"
         ),
         "{page}"
     );
@@ -187,6 +187,14 @@ fn a_tiny_plan_puts_controllers_side_by_side_on_terrains_and_through_a_change() 
         .find(|c| c["policy"] == "scripted" && c["terrain"] == "switch:2cm:5cm:4")
         .unwrap();
     assert_eq!(crawl_change["phases"], 14);
+    assert_eq!(
+        crawl_change["task_overrides"],
+        serde_json::json!(["base_height_reference=feet"])
+    );
+    assert!(
+        page.contains("judged with the task settings `base_height_reference=feet`"),
+        "{page}"
+    );
     let profile = crawl_change["summary"]["change_response"]["mean_profile_m"]
         .as_array()
         .unwrap();

@@ -33,6 +33,8 @@ pub struct EvalArgs {
     policy: String,
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    task: crate::commands::TaskOverrideArgs,
     /// Episodes to run, on consecutive seeds from --seed
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     episodes: u32,
@@ -121,7 +123,8 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
         return compare::compare(&args.compare, args.out.as_deref(), args.json);
     }
     args.video.check()?;
-    let experiment = args.scene.experiment(registry)?;
+    let mut experiment = args.scene.experiment(registry)?;
+    args.task.apply(&mut experiment)?;
     let out_dir = args.out.clone().unwrap_or_else(|| {
         default_out_dir(&args.policy, &experiment.terrain.to_string(), args.seed)
     });
@@ -129,6 +132,7 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
         policy: args.policy.clone(),
         experiment,
         config_path: args.scene.config_path().map(Path::to_path_buf),
+        task_overrides: args.task.overrides.clone(),
         robot: args.scene.robot()?,
         seeds: (0..args.episodes as u64)
             .map(|k| args.seed.wrapping_add(k))

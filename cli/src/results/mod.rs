@@ -63,6 +63,8 @@ struct CellKey {
     terrain: String,
     seeds: Vec<u64>,
     phases: u32,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    task_overrides: Vec<String>,
 }
 
 const CELL_KEY_FILE: &str = "cell.json";
@@ -84,86 +86,108 @@ fn fingerprint(policy: &str) -> Result<String> {
     Ok(format!("{:016x}", learn::checkpoint::fnv1a64(&bytes)))
 }
 
-/// The `quadwalk eval` command that runs seed set `seed` of a cell of
-/// `phases` phases per episode.
-fn eval_command(policy: &str, terrain: &str, plan: &Plan, seed: u64, phases: u32) -> String {
-    format!(
-        "quadwalk eval --policy {policy} --terrain {terrain} --episodes {} --phases {phases} --seed {seed} --threads 2",
-        plan.evaluation.episodes
-    )
+/// One evaluation of the plan: what `quadwalk eval` runs, once per seed
+/// set.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+struct Cell {
+    policy: String,
+    terrain: String,
+    /// the first seed of each set
+    seed_sets: Vec<u64>,
+    /// phases per episode
+    phases: u32,
+    /// `--task KEY=VALUE` settings over the terrain's default task
+    task_overrides: Vec<String>,
 }
 
-/// Evaluations by (policy, terrain), run or read from the cache.
-struct Evaluations<'a> {
-    registry: &'a Registry,
-    plan: &'a Plan,
-    args: &'a ResultsArgs,
-    done: BTreeMap<CellId, EvalReport>,
-}
-
-/// An evaluation: policy, terrain, the first seeds of its sets and the
-/// phases of its episodes.
-type CellId = (String, String, Vec<u64>, u32);
-
-fn cell_id(policy: &str, terrain: &str, seed_sets: &[u64], phases: u32) -> CellId {
-    (
-        policy.to_string(),
-        terrain.to_string(),
-        seed_sets.to_vec(),
-        phases,
-    )
-}
-
-impl Evaluations<'_> {
-    /// The evaluation of `policy` on `terrain` over the seed sets starting
-    /// at `seed_sets`, `phases` phases per episode.
-    fn get(
-        &mut self,
-        policy: &str,
-        terrain: &str,
-        seed_sets: &[u64],
-        phases: u32,
-    ) -> Result<&EvalReport> {
-        let id = cell_id(policy, terrain, seed_sets, phases);
-        if !self.done.contains_key(&id) {
-            let report = self.run(policy, terrain, seed_sets, phases)?;
-            self.done.insert(id.clone(), report);
+impl Cell {
+    /// A cell of the plan's own phases and task.
+    fn new(policy: &str, terrain: &str, seed_sets: &[u64], plan: &Plan) -> Self {
+        Self {
+            policy: policy.to_string(),
+            terrain: terrain.to_string(),
+            seed_sets: seed_sets.to_vec(),
+            phases: plan.evaluation.phases,
+            task_overrides: Vec::new(),
         }
-        Ok(&self.done[&id])
     }
 
-    fn run(
-        &self,
-        policy: &str,
-        terrain: &str,
-        seed_sets: &[u64],
-        phases: u32,
-    ) -> Result<EvalReport> {
-        let key = CellKey {
-            policy: policy.to_string(),
-            policy_fingerprint: fingerprint(policy)?,
-            terrain: terrain.to_string(),
-            seeds: self.plan.seeds_of(seed_sets),
-            phases,
-        };
-        let sets = seed_sets
+    /// The `quadwalk eval` commands that run it, one per seed set.
+    fn commands(&self, plan: &Plan) -> Vec<String> {
+        let task: String = self
+            .task_overrides
+            .iter()
+            .map(|o| format!(" --task {o}"))
+            .collect();
+        self.seed_sets
+            .iter()
+            .map(|seed| {
+                format!(
+                    "quadwalk eval --policy {} --terrain {}{task} --episodes {} --phases {} --seed {seed} --threads 2",
+                    self.policy, self.terrain, plan.evaluation.episodes, self.phases
+                )
+            })
+            .collect()
+    }
+
+    /// Its cache directory's name under `--cache`: a cell of the plan's
+    /// own phases and task keeps the name of caches written before cells
+    /// had phases and tasks of their own.
+    fn cache_name(&self, plan: &Plan) -> String {
+        let sets = self
+            .seed_sets
             .iter()
             .map(u64::to_string)
             .collect::<Vec<_>>()
             .join("-");
-        // the plan's own phases keep the names of caches written before
-        // cells had phases of their own
-        let phases_tag = if phases == self.plan.evaluation.phases {
-            String::new()
-        } else {
-            format!("--{phases}ph")
+        let mut name = format!(
+            "{}--{}--{}x{sets}",
+            slug(&self.policy),
+            slug(&self.terrain),
+            plan.evaluation.episodes
+        );
+        if self.phases != plan.evaluation.phases {
+            name.push_str(&format!("--{}ph", self.phases));
+        }
+        for o in &self.task_overrides {
+            name.push_str("--");
+            name.push_str(&slug(o));
+        }
+        name
+    }
+}
+
+/// The plan's evaluations, run or read from the cache.
+struct Evaluations<'a> {
+    registry: &'a Registry,
+    plan: &'a Plan,
+    args: &'a ResultsArgs,
+    done: BTreeMap<Cell, EvalReport>,
+}
+
+impl Evaluations<'_> {
+    /// The evaluation of `cell`.
+    fn get(&mut self, cell: &Cell) -> Result<&EvalReport> {
+        if !self.done.contains_key(cell) {
+            let report = self.run(cell)?;
+            self.done.insert(cell.clone(), report);
+        }
+        Ok(&self.done[cell])
+    }
+
+    fn run(&self, cell: &Cell) -> Result<EvalReport> {
+        let Cell {
+            policy, terrain, ..
+        } = cell;
+        let key = CellKey {
+            policy: policy.clone(),
+            policy_fingerprint: fingerprint(policy)?,
+            terrain: terrain.clone(),
+            seeds: self.plan.seeds_of(&cell.seed_sets),
+            phases: cell.phases,
+            task_overrides: cell.task_overrides.clone(),
         };
-        let dir = self.args.cache.join(format!(
-            "{}--{}--{}x{sets}{phases_tag}",
-            slug(policy),
-            slug(terrain),
-            self.plan.evaluation.episodes
-        ));
+        let dir = self.args.cache.join(cell.cache_name(self.plan));
         let key_path = dir.join(CELL_KEY_FILE);
         if !self.args.fresh
             && let Ok(text) = std::fs::read_to_string(&key_path)
@@ -179,12 +203,17 @@ impl Evaluations<'_> {
             key.phases
         );
         let spec = self.registry.parse(terrain)?;
+        let mut experiment = experiment::config::Experiment::for_terrain(spec);
+        experiment.task =
+            experiment::config::apply_task_overrides(&experiment.task, &cell.task_overrides)
+                .map_err(anyhow::Error::msg)?;
         let report = eval::evaluate(
             self.registry,
             &EvalRequest {
-                policy: policy.to_string(),
-                experiment: experiment::config::Experiment::for_terrain(spec),
+                policy: policy.clone(),
+                experiment,
                 config_path: None,
+                task_overrides: cell.task_overrides.clone(),
                 robot: crate::commands::load_robot(None)?,
                 seeds: key.seeds.clone(),
                 phases: key.phases,
@@ -239,7 +268,6 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         )
     };
     let mut written = Vec::new();
-    let phases_all = plan.evaluation.phases;
 
     if let Some(s) = &plan.scenarios {
         let policies = [
@@ -255,20 +283,13 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
                 .find(|(k, _)| *k == scenario)
                 .map(|(_, p)| *p)
                 .expect("every scenario has a policy");
-            let sets = &plan.evaluation.seed_sets;
-            reports.insert(
-                scenario,
-                (
-                    policy,
-                    terrain,
-                    evals.get(policy, terrain, sets, phases_all)?.clone(),
-                ),
-            );
+            let cell = Cell::new(policy, terrain, &plan.evaluation.seed_sets, &plan);
+            reports.insert(scenario, (cell.clone(), evals.get(&cell)?.clone()));
         }
         let mut columns: [Option<&eval::summary::TerrainSummary>; 7] = [None; 7];
         let mut phases = [0usize; 7];
         for (k, c) in paper_table::COLUMNS.iter().enumerate() {
-            let summary = &reports[c.scenario].2.summary;
+            let summary = &reports[c.scenario].1.summary;
             columns[k] = summary
                 .terrain_types
                 .iter()
@@ -283,11 +304,15 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         );
         page.push_str("Each scenario's policy on its own terrain (`T_v2^2`: the T_v2 policy's phases that start on a 2 cm region of T_v2). Rows: the standard deviation and mean of the base height h_b over every physics step, and each swing foot's target landing height relative to its squat height (cm), ours / the paper's.\n\n| scenario | policy | terrain | success | distance, m (mean) |\n| --- | --- | --- | ---: | ---: |\n");
         for (scenario, _) in paper_table::SCENARIO_TERRAINS {
-            let (policy, terrain, report) = &reports[scenario];
+            let (cell, report) = &reports[scenario];
             let _ = writeln!(
                 page,
-                "| {scenario} | {policy} | `{terrain}` | {}/{} | {:.2} |",
-                report.summary.successes, report.summary.episodes, report.summary.distance_m.mean
+                "| {scenario} | {} | `{}` | {}/{} | {:.2} |",
+                cell.policy,
+                cell.terrain,
+                report.summary.successes,
+                report.summary.episodes,
+                report.summary.distance_m.mean
             );
         }
         page.push('\n');
@@ -301,13 +326,8 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
             paper_table::findings_markdown(&findings)
         );
         for (scenario, _) in paper_table::SCENARIO_TERRAINS {
-            let (policy, terrain, _) = &reports[scenario];
-            for &seed in &plan.evaluation.seed_sets {
-                let _ = writeln!(
-                    page,
-                    "{}",
-                    eval_command(policy, terrain, &plan, seed, phases_all)
-                );
+            for command in reports[scenario].0.commands(&plan) {
+                let _ = writeln!(page, "{command}");
             }
         }
         page.push_str("```\n");
@@ -315,14 +335,14 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         let curves: Vec<eval::summary::TerrainSummary> = paper_table::SCENARIO_TERRAINS
             .iter()
             .map(|(scenario, _)| {
-                let report = &reports[scenario].2;
+                let report = &reports[scenario].1;
                 let all = report
                     .summary
                     .terrain_types
                     .iter()
                     .find(|t| t.terrain == eval::summary::ALL_TERRAIN)
                     .expect("every summary pools its terrain types");
-                paper_table::fig4_curve(&format!("{scenario}: {}", reports[scenario].0), all)
+                paper_table::fig4_curve(&format!("{scenario}: {}", reports[scenario].0.policy), all)
             })
             .collect();
         let refs: Vec<_> = curves.iter().collect();
@@ -337,23 +357,22 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
 
     if let Some(m) = &plan.matrix {
         let sets = plan.matrix_seed_sets();
-        for p in &m.policies {
-            for t in &m.terrains {
-                evals.get(p, t, sets, phases_all)?;
-            }
-        }
-        let cells: Vec<matrix::Cell> = m
+        let plan_cells: Vec<(&String, &String, Cell)> = m
             .policies
             .iter()
             .flat_map(|p| m.terrains.iter().map(move |t| (p, t)))
-            .map(|(p, t)| matrix::Cell {
+            .map(|(p, t)| (p, t, Cell::new(p, t, sets, &plan)))
+            .collect();
+        for (_, _, cell) in &plan_cells {
+            evals.get(cell)?;
+        }
+        let cells: Vec<matrix::Cell> = plan_cells
+            .iter()
+            .map(|(p, t, cell)| matrix::Cell {
                 policy: p,
                 terrain: t,
-                report: &evals.done[&cell_id(p, t, sets, phases_all)],
-                commands: sets
-                    .iter()
-                    .map(|&s| eval_command(p, t, &plan, s, phases_all))
-                    .collect(),
+                report: &evals.done[cell],
+                commands: cell.commands(&plan),
             })
             .collect();
         let mut page = header("Every policy on every terrain", plan.matrix_seed_sets());
@@ -363,30 +382,30 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
 
     if !plan.ablation.is_empty() {
         let sets = &plan.evaluation.seed_sets;
-        for r in &plan.ablation {
-            evals.get(&r.policy, &r.terrain, sets, phases_all)?;
+        let plan_cells: Vec<Cell> = plan
+            .ablation
+            .iter()
+            .map(|r| Cell::new(&r.policy, &r.terrain, sets, &plan))
+            .collect();
+        for cell in &plan_cells {
+            evals.get(cell)?;
         }
         let runs: Vec<ablation::Run> = plan
             .ablation
             .iter()
-            .map(|r| ablation::Run {
+            .zip(&plan_cells)
+            .map(|(r, cell)| ablation::Run {
                 variant: &r.variant,
                 seed: r.seed,
                 policy: &r.policy,
-                report: &evals.done[&cell_id(&r.policy, &r.terrain, sets, phases_all)],
+                report: &evals.done[cell],
             })
             .collect();
         let mut page = header("Observation ablations", &plan.evaluation.seed_sets);
         page.push_str(&ablation::markdown(&runs));
         page.push_str("\n![learning curves](ablation-curves.png)\n\nThe commands (one per seed set):\n\n```sh\n");
-        for r in &plan.ablation {
-            for &seed in &plan.evaluation.seed_sets {
-                let _ = writeln!(
-                    page,
-                    "{}",
-                    eval_command(&r.policy, &r.terrain, &plan, seed, phases_all)
-                );
-            }
+        for command in plan_cells.iter().flat_map(|c| c.commands(&plan)) {
+            let _ = writeln!(page, "{command}");
         }
         page.push_str("```\n");
         write(&out_dir, "ablations.md", &page, &mut written)?;
@@ -398,38 +417,47 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
     if let Some(c) = &plan.controllers {
         let sets = &plan.evaluation.seed_sets;
         let change_phases = plan.change_phases();
-        let runs: Vec<(&str, &str, u32)> = c
+        // every row on every terrain, then through every change, judged
+        // alike by the section's task settings
+        let plan_cells: Vec<(&str, &str, Cell)> = c
             .terrains
             .iter()
-            .map(|t| (t.as_str(), phases_all))
-            .chain(c.changes.iter().map(|t| (t.as_str(), change_phases)))
-            .flat_map(|(t, phases)| c.row.iter().map(move |r| (r.policy.as_str(), t, phases)))
+            .map(|t| (t, plan.evaluation.phases))
+            .chain(c.changes.iter().map(|t| (t, change_phases)))
+            .flat_map(|(t, phases)| c.row.iter().map(move |r| (r, t, phases)))
+            .map(|(r, t, phases)| {
+                let cell = Cell {
+                    phases,
+                    task_overrides: c.task.clone(),
+                    ..Cell::new(&r.policy, t, sets, &plan)
+                };
+                (r.name.as_str(), t.as_str(), cell)
+            })
             .collect();
-        for &(policy, terrain, phases) in &runs {
-            evals.get(policy, terrain, sets, phases)?;
+        for (_, _, cell) in &plan_cells {
+            evals.get(cell)?;
         }
         let rows: Vec<(&str, &str)> = c
             .row
             .iter()
             .map(|r| (r.name.as_str(), r.policy.as_str()))
             .collect();
-        let cells: Vec<controllers::Cell> = c
-            .row
+        let cells: Vec<controllers::Cell> = plan_cells
             .iter()
-            .flat_map(|r| {
-                c.terrains
-                    .iter()
-                    .map(|t| (t, phases_all))
-                    .chain(c.changes.iter().map(|t| (t, change_phases)))
-                    .map(move |(t, phases)| (r, t, phases))
-            })
-            .map(|(r, t, phases)| controllers::Cell {
-                name: &r.name,
-                terrain: t,
-                report: &evals.done[&cell_id(&r.policy, t, sets, phases)],
+            .map(|(name, terrain, cell)| controllers::Cell {
+                name,
+                terrain,
+                report: &evals.done[cell],
             })
             .collect();
         let mut page = header("Controllers side by side", sets);
+        if !c.task.is_empty() {
+            let _ = write!(
+                page,
+                "Every controller is judged with the task settings `{}` over the terrain's default task (`quadwalk eval --task`).\n\n",
+                c.task.join("`, `")
+            );
+        }
         if !c.terrains.is_empty() {
             page.push_str(&controllers::terrain_table(&rows, &c.terrains, &cells));
         }
@@ -444,14 +472,8 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
             written.push(path);
         }
         page.push_str("\nThe commands (one per seed set):\n\n```sh\n");
-        for &(policy, terrain, phases) in &runs {
-            for &seed in sets {
-                let _ = writeln!(
-                    page,
-                    "{}",
-                    eval_command(policy, terrain, &plan, seed, phases)
-                );
-            }
+        for command in plan_cells.iter().flat_map(|(_, _, c)| c.commands(&plan)) {
+            let _ = writeln!(page, "{command}");
         }
         page.push_str("```\n");
         write(&out_dir, "controllers.md", &page, &mut written)?;
@@ -460,7 +482,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
     let summaries: Vec<serde_json::Value> = evals
         .done
         .iter()
-        .map(|((policy, terrain, sets, phases), r)| {
+        .map(|(cell, r)| {
             // Fig. 4's 360 bins per terrain type stay in the cached eval.json
             let mut summary = serde_json::to_value(&r.summary)?;
             if let Some(types) = summary
@@ -471,13 +493,17 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
                     t.remove("base_height_by_angle_m");
                 }
             }
-            Ok(serde_json::json!({
-                "policy": policy,
-                "terrain": terrain,
-                "seeds": plan.seeds_of(sets),
-                "phases": phases,
+            let mut entry = serde_json::json!({
+                "policy": cell.policy,
+                "terrain": cell.terrain,
+                "seeds": plan.seeds_of(&cell.seed_sets),
+                "phases": cell.phases,
                 "summary": summary,
-            }))
+            });
+            if !cell.task_overrides.is_empty() {
+                entry["task_overrides"] = serde_json::json!(cell.task_overrides);
+            }
+            Ok(entry)
         })
         .collect::<Result<_>>()?;
     write(

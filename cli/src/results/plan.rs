@@ -28,6 +28,8 @@
 //! terrains = ["varying:2m:2,3,4,5cm,rigid", "soil:4cm"]
 //! changes = ["switch:2cm:5cm:30"]          # terrains that change mid-episode
 //! change_phases = 60                       # optional: phases of those episodes
+//! task = ["base_height_reference=feet"]    # optional: `quadwalk eval --task` settings
+//!                                          # that judge every controller alike
 //! [[controllers.row]]
 //! name = "phase level"
 //! policy = "policies/tv2"
@@ -132,6 +134,10 @@ pub struct ControllersPlan {
     /// phases of each episode on `changes` (`None`: `[evaluation]`'s); the
     /// response needs the change's time plus 6 s
     pub change_phases: Option<u32>,
+    /// `KEY=VALUE` task settings over each terrain's default task
+    /// (`quadwalk eval --task`), for every row alike
+    #[serde(default)]
+    pub task: Vec<String>,
 }
 
 /// `[[controllers.row]]`: one controller.
@@ -271,6 +277,8 @@ impl Plan {
             if c.change_phases == Some(0) {
                 bail!("controllers.change_phases = 0: must be at least 1");
             }
+            experiment::config::apply_task_overrides(&experiment::config::default_task(), &c.task)
+                .map_err(|e| anyhow::anyhow!("controllers.task: {e}"))?;
         }
         Ok(())
     }
@@ -365,6 +373,11 @@ mod tests {
         assert!(e.contains("one terrain or change"), "{e}");
         let e = controllers("changes = [\"switch:2cm:5cm:30\"]\nchange_phases = 0");
         assert!(e.contains("change_phases = 0"), "{e}");
+        let e = controllers("terrains = [\"rigid\"]\ntask = [\"base_height_reference=belly\"]");
+        assert!(
+            e.contains("controllers.task: --task \"base_height_reference=belly\""),
+            "{e}"
+        );
         let e = err(&format!("{base}seed_sets = [1]\nepisodez = 3\n{matrix}"));
         assert!(e.contains("episodez"), "unknown keys are refused: {e}");
     }

@@ -57,7 +57,7 @@ impl Stage {
 
 /// `[curriculum.task]` keys that would change the networks' input (the
 /// observation), which is fixed for a run.
-const FIXED_TASK_KEYS: [&str; 2] = ["observation", "action_prior"];
+pub(super) const FIXED_TASK_KEYS: [&str; 2] = ["observation", "action_prior"];
 
 impl Experiment {
     /// Total training iterations: the curriculum's sum, else

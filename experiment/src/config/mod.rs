@@ -82,11 +82,13 @@ mod curriculum;
 mod defaults;
 mod fork;
 pub mod residual;
+mod task_overrides;
 mod terrain_table;
 mod train_settings;
 
 pub use curriculum::Stage;
 pub use defaults::{default_ppo, default_task};
+pub use task_overrides::apply_task_overrides;
 pub use train_settings::TrainSettings;
 
 use curriculum::curriculum_from_doc;

@@ -55,6 +55,9 @@ pub struct EvalReport {
     pub max_phases: usize,
     /// whether actions were sampled
     pub stochastic: bool,
+    /// the `--task KEY=VALUE` settings over the scene's task that judged it
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub task_overrides: Vec<String>,
     /// the aggregates
     pub summary: Summary,
     /// every episode, in seed order
@@ -89,6 +92,9 @@ pub struct EvalRequest {
     /// the experiment file, when the user gave one (a policy that observes
     /// otherwise than it sets up is then an error)
     pub config_path: Option<PathBuf>,
+    /// `KEY=VALUE` settings already applied to `experiment.task`, recorded
+    /// in the report
+    pub task_overrides: Vec<String>,
     /// the robot
     pub robot: Arc<RobotModel>,
     /// one episode per seed, in this order
@@ -245,6 +251,7 @@ impl<'a> EvalScene<'a> {
             first_seed,
             max_phases: request.phases as usize,
             stochastic: request.stochastic,
+            task_overrides: request.task_overrides.clone(),
             summary,
             episodes,
         })

@@ -40,7 +40,16 @@ pub struct RunCurve {
 /// Reads `metrics.jsonl` of `dir`: cumulative phases, cumulative wall time
 /// (each iteration's `phases / phases_per_s`) and `metric`.
 pub fn read_run(name: &str, dir: &Path, metric: &str) -> Result<RunCurve> {
-    let path = dir.join(experiment::train::run_dir::METRICS_FILE);
+    read_metrics(
+        name,
+        &dir.join(experiment::train::run_dir::METRICS_FILE),
+        metric,
+    )
+}
+
+/// [`read_run`] of the metrics file at `path`.
+pub fn read_metrics(name: &str, path: &Path, metric: &str) -> Result<RunCurve> {
+    let path = path.to_path_buf();
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("run {name}: cannot read {}", path.display()))?;
     let (mut phases, mut secs, mut points) = (0.0, 0.0, Vec::new());

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 
 use crate::eval::plots::{self, Curve};
 use experiment::eval::EvalReport;
@@ -69,34 +69,6 @@ pub fn metrics_file(policy: &str) -> Result<PathBuf> {
         })
 }
 
-/// The mean training-episode distance per iteration of a run's
-/// `metrics.jsonl`.
-pub fn distance_curve(path: &Path) -> Result<Vec<(f64, f64)>> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let mut points = Vec::new();
-    for (k, line) in text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty())
-    {
-        let value: serde_json::Value = serde_json::from_str(line)
-            .with_context(|| format!("{}:{}: not JSON", path.display(), k + 1))?;
-        let (Some(iteration), Some(distance)) = (
-            value.get("iteration").and_then(|v| v.as_f64()),
-            value.get("mean_distance_m").and_then(|v| v.as_f64()),
-        ) else {
-            bail!(
-                "{}:{}: no iteration or mean_distance_m",
-                path.display(),
-                k + 1
-            );
-        };
-        points.push((iteration, distance));
-    }
-    Ok(points)
-}
-
 /// The learning curves of every run, one colour per variant, drawn to
 /// `path`.
 pub fn curves_png(path: &Path, runs: &[Run]) -> Result<()> {
@@ -108,9 +80,15 @@ pub fn curves_png(path: &Path, runs: &[Run]) -> Result<()> {
     }
     let mut curves = Vec::new();
     for r in runs {
-        let points = distance_curve(&metrics_file(r.policy)?)?;
+        let label = format!("{} (seed {})", r.variant, r.seed);
+        let run = crate::curves::read_metrics(&label, &metrics_file(r.policy)?, "mean_distance_m")?;
+        let points = run
+            .points
+            .iter()
+            .map(|&(phases, _, d)| (phases, d))
+            .collect();
         curves.push(Curve {
-            label: format!("{} (seed {})", r.variant, r.seed),
+            label,
             colour_index: variants.iter().position(|v| *v == r.variant).unwrap_or(0),
             points,
         });
@@ -118,7 +96,7 @@ pub fn curves_png(path: &Path, runs: &[Run]) -> Result<()> {
     plots::curves(
         path,
         "observation ablations: training episodes' mean distance",
-        "iteration",
+        "phases trained",
         "mean distance per training episode (m)",
         &curves,
     )

@@ -126,6 +126,7 @@ pub struct ControllersPlan {
     /// the rows
     pub row: Vec<ControllerRow>,
     /// the terrains of the success and speed table
+    #[serde(default)]
     pub terrains: Vec<String>,
     /// terrains that change by themselves mid-episode (`switch:...`): the
     /// response table and figure

@@ -69,16 +69,7 @@ def run_episode(robot: MujocoRobot, controller, act, task: dict, phases: int, se
     fall, done = None, 0
     for _ in range(phases):
         obs = controller.observe(state, goal)
-        controller.plan_phase(act(obs), state)
-        for sample in range(1, quadwalk.Controller.samples_per_phase + 1):
-            targets = controller.joint_targets(sample)
-            controller.record_step(state)
-            robot.step(targets)
-            state = robot.state()
-            fall = robot.fall()
-            if fall:
-                break
-        controller.end_phase()
+        state, fall = quadwalk.run_phase(controller, robot, act(obs), state, stop=lambda _: robot.fall())
         done += 1
         if fall:
             break

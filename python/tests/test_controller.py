@@ -31,13 +31,7 @@ def test_the_controller_on_a_bare_robot_reproduces_the_environment(root):
         obs = controller.observe(state, list(env.goal_xy_m))
         np.testing.assert_array_equal(obs, env_obs, err_msg=f"phase {phase}")
         action = session.run(["action"], {"observation": obs[None, :]})[0][0]
-        controller.plan_phase(action, state)
-        for sample in range(1, quadwalk.Controller.samples_per_phase + 1):
-            targets = controller.joint_targets(sample)
-            controller.record_step(state)
-            robot.step(targets)
-            state = robot.state()
-        controller.end_phase()
+        quadwalk.run_phase(controller, robot, action, state)
         env_obs, _, terminated, truncated, _ = env.step(action)
         assert not (terminated or truncated)
         assert tuple(robot.state()["base_position_m"]) == env.base_position_m

@@ -37,14 +37,9 @@ def test_the_rigid_policy_walks_in_mujoco_through_the_controller(root):
     for _ in range(20):
         goal = [x0 + 2.0 * (1 + int((state["base_position_m"][0] - x0) // 2.0)), 0.0]
         obs = controller.observe(state, goal)
-        controller.plan_phase(session.run(["action"], {"observation": obs[None]})[0][0], state)
-        for sample in range(1, quadwalk.Controller.samples_per_phase + 1):
-            targets = controller.joint_targets(sample)
-            controller.record_step(state)
-            robot.step(targets)
-            state = robot.state()
-        controller.end_phase()
-        assert robot.fall() is None
+        action = session.run(["action"], {"observation": obs[None]})[0][0]
+        state, fall = quadwalk.run_phase(controller, robot, action, state, stop=lambda _: robot.fall())
+        assert fall is None
     assert state["base_position_m"][0] - x0 > 0.5, "20 phases of walking"
 
 

@@ -16,8 +16,9 @@ wraps them in Gymnasium's interfaces:
   observations;
 - ``Controller.for_policy(dir)``: the phase-level controller a robot runs
   around a policy (its observation from the measured state, the phase plan,
-  the joint targets of each 240 Hz control step), and ``Sim``: quadwalk's
-  world as a bare robot it drives step by step.
+  the joint targets of each 240 Hz control step), ``run_phase`` its loop
+  over one phase on any robot, and ``Sim``: quadwalk's world as a bare robot
+  it drives step by step.
 
 A bad terrain spec, experiment file or action raises ``ValueError`` with a
 message that names it.
@@ -48,6 +49,7 @@ __all__ = [
     "Sim",
     "make_env",
     "make_vec_env",
+    "run_phase",
     "terrains",
 ]
 
@@ -183,6 +185,30 @@ class QuadwalkVectorEnv(gym.vector.VectorEnv):
             )
         obs, rewards, terminated, truncated, infos = self._env.step(actions)
         return obs, rewards, terminated, truncated, infos
+
+
+def run_phase(controller: Controller, robot, action, state: dict, stop=None) -> tuple[dict, Any]:
+    """One phase of a deployed policy: ``controller`` plans it from
+    ``action`` and the measured ``state``, then drives ``robot`` through its
+    240 Hz joint targets (``robot.step(targets)``, then ``robot.state()``:
+    ``Sim``, ``quadwalk.mujoco_scene.MujocoRobot`` or a real robot's
+    interface). ``stop(state)``, called after each step, ends the phase
+    early when it returns something true (a fall's cause). Returns the last
+    state and what ``stop`` returned (``None`` when the phase ran to its
+    end)."""
+    controller.plan_phase(action, state)
+    stopped = None
+    for sample in range(1, Controller.samples_per_phase + 1):
+        targets = controller.joint_targets(sample)
+        controller.record_step(state)
+        robot.step(targets)
+        state = robot.state()
+        if stop is not None:
+            stopped = stop(state) or None
+            if stopped is not None:
+                break
+    controller.end_phase()
+    return state, stopped
 
 
 def _path(config) -> str | None:

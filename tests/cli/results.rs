@@ -117,6 +117,34 @@ fn a_tiny_plan_writes_table_one_fig_four_the_matrix_and_the_ablations() {
         std::fs::read_to_string(out.join("matrix.md")).unwrap(),
         matrix
     );
+
+    // --only matrix: the matrix's page from the cache, the other pages and
+    // the other sections' entries in results.json as they were
+    std::fs::remove_file(out.join("table1.md")).unwrap();
+    std::fs::remove_file(out.join("matrix.md")).unwrap();
+    let mut only = args.to_vec();
+    only.extend(["--only", "matrix"]);
+    let fourth = quadwalk(&only);
+    let stderr = String::from_utf8_lossy(&fourth.stderr).to_string();
+    assert!(fourth.status.success(), "{stderr}");
+    assert_eq!(stderr.matches(": from ").count(), 4, "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("matrix.md")).unwrap(),
+        matrix
+    );
+    assert!(!out.join("table1.md").exists(), "table1.md is not --only's");
+    let kept: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(kept.as_array().unwrap().len(), 8, "{kept}");
+
+    // a section the plan does not have is named
+    let mut absent = args.to_vec();
+    absent.extend(["--only", "controllers"]);
+    let err = failure(&absent, 1);
+    assert!(
+        err.contains("--only controllers") && err.contains("has no [controllers]"),
+        "{err}"
+    );
 }
 
 #[test]

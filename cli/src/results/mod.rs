@@ -14,6 +14,8 @@
 //! plan, exactly as `quadwalk eval` does for each set; its `eval.json` is
 //! kept under `--cache` and reused while the policy's weights and the
 //! plan's evaluation settings stay the same (`--fresh` runs it again).
+//! `--only SECTION` regenerates one section's pages and leaves the others,
+//! and their entries in `results.json`, as they were.
 
 mod ablation;
 mod controllers;
@@ -51,6 +53,45 @@ pub struct ResultsArgs {
     /// Worker threads of each evaluation [default: all cores]
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     threads: Option<u32>,
+    /// Regenerate only this section's pages (repeatable); the other pages,
+    /// and their entries in results.json, stay as they are [default: every
+    /// section of the plan]
+    #[arg(long, value_enum, value_name = "SECTION")]
+    only: Vec<Section>,
+}
+
+/// A section of a plan and the pages it writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Section {
+    /// `[scenarios]`: table1.md, fig4.png
+    Table1,
+    /// `[matrix]`: matrix.md
+    Matrix,
+    /// `[[ablation]]`: ablations.md, ablation-curves.png
+    Ablations,
+    /// `[controllers]`: controllers.md, controllers-response.png
+    Controllers,
+}
+
+impl Section {
+    /// The plan's table that holds this section.
+    fn table(self) -> &'static str {
+        match self {
+            Self::Table1 => "[scenarios]",
+            Self::Matrix => "[matrix]",
+            Self::Ablations => "[[ablation]]",
+            Self::Controllers => "[controllers]",
+        }
+    }
+
+    fn in_plan(self, plan: &Plan) -> bool {
+        match self {
+            Self::Table1 => plan.scenarios.is_some(),
+            Self::Matrix => plan.matrix.is_some(),
+            Self::Ablations => !plan.ablation.is_empty(),
+            Self::Controllers => plan.controllers.is_some(),
+        }
+    }
 }
 
 /// What identifies a cached evaluation: a cache entry is reused only when
@@ -234,6 +275,18 @@ impl Evaluations<'_> {
 /// `quadwalk results`.
 pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
     let plan = Plan::read(&args.plan, registry)?;
+    for section in &args.only {
+        anyhow::ensure!(
+            section.in_plan(&plan),
+            "--only {}: the plan {} has no {}",
+            clap::ValueEnum::to_possible_value(section)
+                .expect("no section is skipped")
+                .get_name(),
+            args.plan.display(),
+            section.table()
+        );
+    }
+    let wanted = |section: Section| args.only.is_empty() || args.only.contains(&section);
     let out_dir = args.out.clone().unwrap_or_else(|| {
         args.plan
             .parent()
@@ -269,7 +322,9 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
     };
     let mut written = Vec::new();
 
-    if let Some(s) = &plan.scenarios {
+    if let Some(s) = &plan.scenarios
+        && wanted(Section::Table1)
+    {
         let policies = [
             ("tv2", s.tv2.as_str()),
             ("tv8", s.tv8.as_str()),
@@ -355,7 +410,9 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         written.push(path);
     }
 
-    if let Some(m) = &plan.matrix {
+    if let Some(m) = &plan.matrix
+        && wanted(Section::Matrix)
+    {
         let sets = plan.matrix_seed_sets();
         let plan_cells: Vec<(&String, &String, Cell)> = m
             .policies
@@ -380,7 +437,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         write(&out_dir, "matrix.md", &page, &mut written)?;
     }
 
-    if !plan.ablation.is_empty() {
+    if !plan.ablation.is_empty() && wanted(Section::Ablations) {
         let sets = &plan.evaluation.seed_sets;
         let plan_cells: Vec<Cell> = plan
             .ablation
@@ -414,7 +471,9 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         written.push(path);
     }
 
-    if let Some(c) = &plan.controllers {
+    if let Some(c) = &plan.controllers
+        && wanted(Section::Controllers)
+    {
         let sets = &plan.evaluation.seed_sets;
         let change_phases = plan.change_phases();
         // every row on every terrain, then through every change, judged
@@ -479,7 +538,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         write(&out_dir, "controllers.md", &page, &mut written)?;
     }
 
-    let summaries: Vec<serde_json::Value> = evals
+    let mut summaries: Vec<serde_json::Value> = evals
         .done
         .iter()
         .map(|(cell, r)| {
@@ -506,6 +565,9 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
             Ok(entry)
         })
         .collect::<Result<_>>()?;
+    if !args.only.is_empty() {
+        summaries = kept_summaries(&out_dir.join("results.json"), summaries)?;
+    }
     write(
         &out_dir,
         "results.json",
@@ -516,6 +578,37 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         out!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// What identifies an entry of results.json: the evaluation it summarises.
+fn entry_key(entry: &serde_json::Value) -> [&serde_json::Value; 5] {
+    ["policy", "terrain", "seeds", "phases", "task_overrides"]
+        .map(|k| entry.get(k).unwrap_or(&serde_json::Value::Null))
+}
+
+/// `fresh` entries, after the entries of `path` (an earlier results.json)
+/// that none of them replaces: with `--only`, the other sections' entries
+/// stay.
+fn kept_summaries(
+    path: &Path,
+    fresh: Vec<serde_json::Value>,
+) -> Result<Vec<serde_json::Value>> {
+    let earlier: Vec<serde_json::Value> = match std::fs::read_to_string(path) {
+        Ok(text) => serde_json::from_str(&text).with_context(|| {
+            format!(
+                "{}: not a results.json (a list of evaluations); --only keeps its other entries",
+                path.display()
+            )
+        })?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+        Err(e) => return Err(e).with_context(|| format!("cannot read {}", path.display())),
+    };
+    let mut kept: Vec<serde_json::Value> = earlier
+        .into_iter()
+        .filter(|old| fresh.iter().all(|new| entry_key(new) != entry_key(old)))
+        .collect();
+    kept.extend(fresh);
+    Ok(kept)
 }
 
 fn write(dir: &Path, name: &str, text: &str, written: &mut Vec<PathBuf>) -> Result<()> {

@@ -474,7 +474,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
     if let Some(c) = &plan.controllers
         && wanted(Section::Controllers)
     {
-        let sets = &plan.evaluation.seed_sets;
+        let sets = plan.controllers_seed_sets();
         let change_phases = plan.change_phases();
         // every row on every terrain, then through every change, judged
         // alike by the section's task settings

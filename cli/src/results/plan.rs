@@ -30,6 +30,7 @@
 //! change_phases = 60                       # optional: phases of those episodes
 //! task = ["base_height_reference=feet"]    # optional: `quadwalk eval --task` settings
 //!                                          # that judge every controller alike
+//! seed_sets = [1000000]                    # optional: its own seed sets
 //! [[controllers.row]]
 //! name = "phase level"
 //! policy = "policies/tv2"
@@ -139,6 +140,8 @@ pub struct ControllersPlan {
     /// (`quadwalk eval --task`), for every row alike
     #[serde(default)]
     pub task: Vec<String>,
+    /// the section's own seed sets, in place of `[evaluation]`'s
+    pub seed_sets: Option<Vec<u64>>,
 }
 
 /// `[[controllers.row]]`: one controller.
@@ -193,6 +196,9 @@ impl Plan {
         check_sets("evaluation.seed_sets", &e.seed_sets)?;
         if let Some(sets) = self.matrix.as_ref().and_then(|m| m.seed_sets.as_ref()) {
             check_sets("matrix.seed_sets", sets)?;
+        }
+        if let Some(sets) = self.controllers.as_ref().and_then(|c| c.seed_sets.as_ref()) {
+            check_sets("controllers.seed_sets", sets)?;
         }
         if self.scenarios.is_none()
             && self.matrix.is_none()
@@ -306,6 +312,14 @@ impl Plan {
             .and_then(|m| m.seed_sets.as_deref())
             .unwrap_or(&self.evaluation.seed_sets)
     }
+
+    /// The seed sets of the controllers' cells.
+    pub fn controllers_seed_sets(&self) -> &[u64] {
+        self.controllers
+            .as_ref()
+            .and_then(|c| c.seed_sets.as_deref())
+            .unwrap_or(&self.evaluation.seed_sets)
+    }
 }
 
 #[cfg(test)]
@@ -337,6 +351,12 @@ mod tests {
         )
         .unwrap();
         assert_eq!(controllers.change_phases(), 60);
+        assert_eq!(controllers.controllers_seed_sets(), [10]);
+        let own_sets = parse(
+            "[evaluation]\nepisodes = 2\nphases = 3\nseed_sets = [10]\n[controllers]\nterrains = [\"rigid\"]\nseed_sets = [50, 60]\n[[controllers.row]]\nname = \"crawl\"\npolicy = \"scripted\"\n",
+        )
+        .unwrap();
+        assert_eq!(own_sets.controllers_seed_sets(), [50, 60]);
         assert_eq!(controllers.controllers.unwrap().row[0].name, "crawl");
         assert_eq!(own.seeds_of(own.matrix_seed_sets()), [40, 41]);
     }

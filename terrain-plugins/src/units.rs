@@ -90,22 +90,30 @@ pub fn parse_mass_kg(text: &str) -> Result<f64, String> {
 }
 
 /// Prints a length so that [`parse_length_m`] reads back exactly the same
-/// `f64`: in cm when that is exact, otherwise in metres.
+/// `f64`: in cm when that is exact, otherwise in metres, with the fewest
+/// decimals that do (`3.5cm`, not the `3.5000000000000004cm` of 0.035 x 100).
 pub fn format_length(value_m: f64) -> String {
     if value_m.abs() >= 1.0 {
         return format!("{value_m}m");
     }
-    if value_m.abs() < 0.01 {
-        let mm = format!("{}", value_m * 1000.0);
-        if mm.parse::<f64>().map(|v| v / 1000.0) == Ok(value_m) {
-            return format!("{mm}mm");
-        }
+    // the shortest decimal of value_m x per_m that reads back as value_m
+    let shortest = |per_m: f64| {
+        let scaled = value_m * per_m;
+        (0..=17)
+            .map(|decimals| format!("{scaled:.decimals$}"))
+            .find(|text| text.parse::<f64>().map(|v| v / per_m) == Ok(value_m))
+    };
+    let mm = (value_m.abs() < 0.01)
+        .then(|| shortest(1000.0).map(|mm| format!("{mm}mm")))
+        .flatten();
+    let cm = shortest(100.0).map(|cm| format!("{cm}cm"));
+    // below 1 cm the shorter of the two, mm on a tie
+    match (mm, cm) {
+        (Some(mm), Some(cm)) if cm.len() < mm.len() => cm,
+        (Some(mm), _) => mm,
+        (None, Some(cm)) => cm,
+        (None, None) => format!("{value_m}m"),
     }
-    let cm = format!("{}", value_m * 100.0);
-    if cm.parse::<f64>().map(|v| v / 100.0) == Ok(value_m) {
-        return format!("{cm}cm");
-    }
-    format!("{value_m}m")
 }
 
 /// Prints a mass in kg, exactly.
@@ -164,5 +172,9 @@ mod tests {
         assert_eq!(format_length(0.2), "20cm");
         assert_eq!(format_length(0.002), "2mm");
         assert_eq!(format_length(1.5), "1.5m");
+        // the fewest decimals that read back: 0.035 x 100 is 3.5000000000000004
+        for text in ["3.5cm", "2.5cm", "0.7cm", "4.25cm", "1.5mm"] {
+            assert_eq!(format_length(parse_length_m(text).unwrap()), text);
+        }
     }
 }

@@ -589,10 +589,7 @@ fn entry_key(entry: &serde_json::Value) -> [&serde_json::Value; 5] {
 /// `fresh` entries, after the entries of `path` (an earlier results.json)
 /// that none of them replaces: with `--only`, the other sections' entries
 /// stay.
-fn kept_summaries(
-    path: &Path,
-    fresh: Vec<serde_json::Value>,
-) -> Result<Vec<serde_json::Value>> {
+fn kept_summaries(path: &Path, fresh: Vec<serde_json::Value>) -> Result<Vec<serde_json::Value>> {
     let earlier: Vec<serde_json::Value> = match std::fs::read_to_string(path) {
         Ok(text) => serde_json::from_str(&text).with_context(|| {
             format!(

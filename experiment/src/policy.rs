@@ -102,7 +102,8 @@ impl Policy {
             .task_at(learner.iteration().saturating_sub(1))
             .clone();
         let physics = config.physics;
-        if let Some(residual) = config.residual {
+        if let Some(mut residual) = config.residual {
+            crate::residual::phase_policy_seen_from(&mut residual, path);
             if learner.obs_size() != crate::residual::OBSERVATION_SIZE
                 || learner.action_size() != crate::residual::ACTION_SIZE
             {

@@ -28,6 +28,8 @@
 //! phase's own reward (the task's, termination included): the lower level
 //! is paid for what the phase level is paid for.
 
+use std::path::Path;
+
 use anyhow::{Context, Result};
 use nalgebra::Vector3;
 use robot::task::{PhaseOutcome, PhaseRun, Task};
@@ -74,6 +76,27 @@ pub fn load_phase_policy(
     Policy::from_arg(registry, &name, None)
         .map(Some)
         .context("[residual] phase_policy")
+}
+
+/// `config`'s phase policy as seen from the residual policy at
+/// `policy_path`: a relative `phase_policy` that does not exist from the
+/// current directory is looked up from the policy's directory and each
+/// directory above it, so a shipped residual policy, which names its phase
+/// policy from the repository's root (`policies/tv2`), runs from anywhere
+/// in the checkout. Left as it is when no such path exists (loading it
+/// then names it).
+pub fn phase_policy_seen_from(config: &mut ResidualConfig, policy_path: &Path) {
+    let named = config.phase_policy.clone();
+    if named.as_os_str() == NO_PHASE_POLICY || named.is_absolute() || named.exists() {
+        return;
+    }
+    if let Some(found) = policy_path
+        .ancestors()
+        .map(|dir| dir.join(&named))
+        .find(|candidate| candidate.exists())
+    {
+        config.phase_policy = found;
+    }
 }
 
 /// What one control step did.
@@ -272,6 +295,31 @@ mod tests {
             ..ResidualConfig::default()
         };
         ResidualDriver::new(config, Some(Policy::Scripted(ScriptedCrawl::default())))
+    }
+
+    #[test]
+    fn a_relative_phase_policy_is_found_from_the_residual_policys_directory_up() {
+        let root = std::env::temp_dir().join(format!(
+            "quadwalk-phase-policy-seen-from-{}",
+            std::process::id()
+        ));
+        let shipped = root.join("policies");
+        std::fs::create_dir_all(shipped.join("tv2")).unwrap();
+        std::fs::create_dir_all(shipped.join("residual")).unwrap();
+        let named = |name: &str| ResidualConfig {
+            phase_policy: name.into(),
+            ..ResidualConfig::default()
+        };
+        let mut config = named("policies/tv2");
+        phase_policy_seen_from(&mut config, &shipped.join("residual"));
+        assert_eq!(config.phase_policy, shipped.join("tv2"));
+        // `none`, and a name found nowhere, stay as they are
+        for name in [NO_PHASE_POLICY, "policies/tv9"] {
+            let mut config = named(name);
+            phase_policy_seen_from(&mut config, &shipped.join("residual"));
+            assert_eq!(config.phase_policy, std::path::PathBuf::from(name));
+        }
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]

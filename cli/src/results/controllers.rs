@@ -97,10 +97,9 @@ pub fn response_png(
     changes: &[String],
     cells: &[Cell],
 ) -> Result<()> {
-    let titles: Vec<String> = changes
-        .iter()
-        .map(|t| format!("{t}: base height from its level before"))
-        .collect();
+    // the panels sit side by side: the change's spec alone fits its width
+    // (the y axis says what is drawn)
+    let titles: Vec<String> = changes.to_vec();
     let lines: Vec<Vec<Curve>> = changes
         .iter()
         .map(|t| {

@@ -586,10 +586,13 @@ fn entry_key(entry: &serde_json::Value) -> [&serde_json::Value; 5] {
         .map(|k| entry.get(k).unwrap_or(&serde_json::Value::Null))
 }
 
-/// `fresh` entries, after the entries of `path` (an earlier results.json)
-/// that none of them replaces: with `--only`, the other sections' entries
-/// stay.
-fn kept_summaries(path: &Path, fresh: Vec<serde_json::Value>) -> Result<Vec<serde_json::Value>> {
+/// The entries of `path` (an earlier results.json) with `fresh` ones in
+/// the places of those they replace, and the others after them: with
+/// `--only`, the other sections' entries stay, in their order.
+fn kept_summaries(
+    path: &Path,
+    mut fresh: Vec<serde_json::Value>,
+) -> Result<Vec<serde_json::Value>> {
     let earlier: Vec<serde_json::Value> = match std::fs::read_to_string(path) {
         Ok(text) => serde_json::from_str(&text).with_context(|| {
             format!(
@@ -602,7 +605,15 @@ fn kept_summaries(path: &Path, fresh: Vec<serde_json::Value>) -> Result<Vec<serd
     };
     let mut kept: Vec<serde_json::Value> = earlier
         .into_iter()
-        .filter(|old| fresh.iter().all(|new| entry_key(new) != entry_key(old)))
+        .map(|old| {
+            match fresh
+                .iter()
+                .position(|new| entry_key(new) == entry_key(&old))
+            {
+                Some(k) => fresh.remove(k),
+                None => old,
+            }
+        })
         .collect();
     kept.extend(fresh);
     Ok(kept)

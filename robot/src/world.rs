@@ -436,14 +436,19 @@ impl World {
         self.contacts(Examined::NonFeet).non_foot_links
     }
 
+    /// Each hip (abduction joint) in the world frame, m, per leg.
+    pub fn hips_in_world_m(&self) -> [Point3<f64>; 4] {
+        let base = self.base_pose();
+        self.legs
+            .each_ref()
+            .map(|leg| base * Point3::from(leg.abduction_m))
+    }
+
     /// h_b: height of each hip (abduction) joint above the terrain right
     /// below it, m.
     pub fn hip_heights_m(&self) -> [f64; 4] {
-        let base = self.base_pose();
-        std::array::from_fn(|leg| {
-            let hip = base * Point3::from(self.legs()[leg].abduction_m);
-            hip.z - self.surface_height_m(hip.x, hip.y)
-        })
+        self.hips_in_world_m()
+            .map(|hip| hip.z - self.surface_height_m(hip.x, hip.y))
     }
 
     /// The mean hip (abduction joint) height above the mean surface height
@@ -452,13 +457,7 @@ impl World {
     /// have sunk the ground below them (soil) this is h_b plus the holes'
     /// depth; on rigid flat ground it is h_b.
     pub fn base_height_above_feet_m(&self) -> f64 {
-        let base = self.base_pose();
-        let hips_z_m = self
-            .legs()
-            .iter()
-            .map(|leg| (base * Point3::from(leg.abduction_m)).z)
-            .sum::<f64>()
-            / 4.0;
+        let hips_z_m = self.hips_in_world_m().iter().map(|hip| hip.z).sum::<f64>() / 4.0;
         let feet = self.feet_in_world_m();
         let touching = self.feet_touching_ground();
         let standing = touching.iter().any(|&t| t);
@@ -479,10 +478,8 @@ impl World {
     /// height below the mean of the front hips to that below the mean of
     /// the rear hips. 0 where the ground at rest is level.
     pub fn ground_pitch_rad(&self) -> f64 {
-        let base = self.base_pose();
         let (mut front, mut rear) = (Vec::with_capacity(2), Vec::with_capacity(2));
-        for leg in self.legs() {
-            let hip = base * Point3::from(leg.abduction_m);
+        for (leg, hip) in self.legs().iter().zip(self.hips_in_world_m()) {
             if leg.abduction_m.x > 0.0 {
                 front.push(hip);
             } else {

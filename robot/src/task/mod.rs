@@ -463,7 +463,7 @@ impl Task {
 pub(crate) mod tests {
     use std::sync::Arc;
 
-    use nalgebra::{Isometry3, Point3, Vector3};
+    use nalgebra::{Isometry3, Vector3};
     use terrain_plugins::{BuildContext, Registry};
 
     use super::*;
@@ -819,13 +819,7 @@ pub(crate) mod tests {
         // what the feet stand on: the measure is the hips' mean height above
         // the soles of the feet that touch the ground (a sole rests on its
         // tile's top up to the contact's penetration)
-        let base = world.base_pose();
-        let hips_z_m = world
-            .legs()
-            .iter()
-            .map(|leg| (base * Point3::from(leg.abduction_m)).z)
-            .sum::<f64>()
-            / 4.0;
+        let hips_z_m = world.hips_in_world_m().iter().map(|hip| hip.z).sum::<f64>() / 4.0;
         let touching = world.feet_touching_ground();
         let radius_m = world.model().legs[0].foot_radius_m;
         let soles: Vec<f64> = world

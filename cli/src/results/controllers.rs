@@ -8,6 +8,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
+use super::grid::terrain_grid;
 use crate::eval::plots::{self, Curve, Panel};
 use experiment::eval::EvalReport;
 use experiment::eval::response::profile_bin_secs;
@@ -24,30 +25,24 @@ pub struct Cell<'a> {
 
 /// The success and speed table (controllers down, terrains across).
 pub fn terrain_table(rows: &[(&str, &str)], terrains: &[String], cells: &[Cell]) -> String {
-    let mut out = String::from(
-        "Episodes that ran every phase without a fall, of those run, and the mean speed (distance along x over the simulated time, per episode):\n\n| controller | policy |",
-    );
-    for t in terrains {
-        let _ = write!(out, " `{t}` |");
-    }
-    out.push_str("\n| --- | --- |");
-    out.push_str(&" ---: |".repeat(terrains.len()));
-    out.push('\n');
-    for (name, policy) in rows {
-        let _ = write!(out, "| {name} | {policy} |");
-        for t in terrains {
-            let text = find(cells, name, t).map_or("-".into(), |c| {
+    let grid = terrain_grid(
+        &["controller", "policy"],
+        rows,
+        |(name, policy)| vec![name.to_string(), policy.to_string()],
+        terrains,
+        |(name, _), t| {
+            find(cells, name, t).map(|c| {
                 let s = &c.report.summary;
                 format!(
                     "{}/{}, {:.3} m/s",
                     s.successes, s.episodes, s.mean_speed_m_per_s.mean
                 )
-            });
-            let _ = write!(out, " {text} |");
-        }
-        out.push('\n');
-    }
-    out
+            })
+        },
+    );
+    format!(
+        "Episodes that ran every phase without a fall, of those run, and the mean speed (distance along x over the simulated time, per episode):\n\n{grid}"
+    )
 }
 
 /// The response table: one row per controller and change.

@@ -3,6 +3,7 @@
 
 use std::fmt::Write as _;
 
+use super::grid::terrain_grid;
 use experiment::eval::EvalReport;
 
 /// One cell: a policy's evaluation on a terrain, with the commands that
@@ -23,27 +24,22 @@ pub struct Cell<'a> {
 pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> String {
     let find = |p: &str, t: &str| cells.iter().find(|c| c.policy == p && c.terrain == t);
     let mut out = String::from(
-        "Episodes that ran every phase without a fall, of those run (all seed sets together):\n\n| policy |",
+        "Episodes that ran every phase without a fall, of those run (all seed sets together):\n\n",
     );
-    for t in terrains {
-        let _ = write!(out, " `{t}` |");
-    }
-    out.push_str("\n| --- |");
-    out.push_str(&" ---: |".repeat(terrains.len()));
-    out.push('\n');
-    for p in policies {
-        let _ = write!(out, "| {p} |");
-        for t in terrains {
-            let text = find(p, t).map_or("-".into(), |c| {
+    out.push_str(&terrain_grid(
+        &["policy"],
+        policies,
+        |p| vec![p.clone()],
+        terrains,
+        |p, t| {
+            find(p, t).map(|c| {
                 format!(
                     "{}/{}",
                     c.report.summary.successes, c.report.summary.episodes
                 )
-            });
-            let _ = write!(out, " {text} |");
-        }
-        out.push('\n');
-    }
+            })
+        },
+    ));
     out.push_str(
         "\nPer cell: speed is the distance along x over the simulated time, per episode (mean); the cost of transport is the joints' mechanical energy (the sum over steps of |tau q_dot| dt) over m g times the distance, all episodes pooled; foot slip is the horizontal travel of the feet while they touch the ground, per phase (mean over episodes).\n\n| policy | terrain | success | distance, m (mean; min-max) | speed, m/s | cost of transport | foot slip, cm/phase | falls by cause |\n| --- | --- | ---: | --- | ---: | ---: | ---: | --- |\n",
     );

@@ -19,6 +19,7 @@
 
 mod ablation;
 mod controllers;
+mod grid;
 mod matrix;
 mod paper_table;
 mod plan;

@@ -328,3 +328,27 @@ impl EvalReport {
         Ok(report)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// What `write` writes, `read` gives back bit for bit (serde_json's
+    /// `float_roundtrip`): a results page regenerated from cached
+    /// evaluations is the page the fresh ones wrote.
+    #[test]
+    fn numbers_read_back_bit_for_bit() {
+        // two of them read back one ulp off without `float_roundtrip`
+        for x in [
+            0.233_333_333_333_333_34_f64,
+            0.496_760_259_179_265_64,
+            1.0 / 3.0,
+            0.1 + 0.2,
+            2.0_f64.sqrt(),
+            1e-300,
+            12_345.678_901_234_567,
+        ] {
+            let text = serde_json::to_string_pretty(&vec![x]).unwrap();
+            let back: Vec<f64> = serde_json::from_str(&text).unwrap();
+            assert_eq!(back[0].to_bits(), x.to_bits(), "{text}");
+        }
+    }
+}

@@ -821,3 +821,69 @@ fn insert_robot(
         colliders,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use nalgebra::{DMatrix, SMatrix};
+    use terrain_plugins::rapier3d::dynamics::sparse_dofs::add_quadform_on_dofs;
+    use terrain_plugins::{BuildContext, Registry};
+
+    use super::*;
+
+    #[test]
+    fn the_robots_body_jacobians_vanish_outside_their_ancestors_dofs() {
+        // The vendored rapier (third_party/rapier3d) assembles the mass matrix
+        // on each link's own and its ancestors' DOFs only, assuming the body
+        // Jacobian is zero elsewhere. Checked on the Laikago settling onto 5 cm
+        // tiles with its legs moving, where the result must equal nalgebra's
+        // dense quadratic form bit for bit.
+        let model = Arc::new(RobotModel::laikago());
+        let ctx = BuildContext {
+            supported_mass_kg: model.total_mass_kg(),
+            ..BuildContext::default()
+        };
+        let terrain = Registry::builtin().create("elastic:5cm", &ctx).unwrap();
+        let mut world = World::new(model, terrain, WorldConfig::default(), [0.0, 0.0]).unwrap();
+        let mut targets = world.joint_targets_rad().to_vec();
+        for (j, target) in targets.iter_mut().enumerate() {
+            *target += 0.05 * (j as f64 - 5.5) / 5.5;
+        }
+        world.set_joint_targets_rad(&targets);
+        for _ in 0..60 {
+            world.step();
+        }
+        let multibody = world.multibody();
+        let ndofs = multibody.ndofs();
+        assert_eq!(ndofs, 18, "a floating base and 12 hinges");
+        let mid = SMatrix::<f32, 6, 6>::from_fn(|r, c| 1.0 / (1.0 + r as f32 + 2.0 * c as f32));
+        let mut ranges = Vec::new();
+        let mut legs_checked = 0;
+        for link_id in 0..multibody.num_links() {
+            multibody.link_dof_ranges(link_id, &mut ranges);
+            let jacobian = multibody.body_jacobian(link_id);
+            let within = |c: usize| ranges.iter().any(|&(c0, n)| (c0..c0 + n).contains(&c));
+            for c in (0..ndofs).filter(|&c| !within(c)) {
+                assert!(
+                    jacobian.column(c).iter().all(|&x| x == 0.0),
+                    "link {link_id}, column {c}: {:?}",
+                    jacobian.column(c)
+                );
+            }
+            let dofs: usize = ranges.iter().map(|&(_, n)| n).sum();
+            if dofs == 9 {
+                legs_checked += 1;
+                assert!(jacobian.iter().any(|&x| x != 0.0));
+            }
+            let mut dense = DMatrix::<f32>::zeros(ndofs, ndofs);
+            dense.quadform(1.0, &mid, jacobian, 1.0);
+            let mut on_dofs = DMatrix::<f32>::zeros(ndofs, ndofs);
+            add_quadform_on_dofs(&mut on_dofs, &mid, jacobian, &ranges);
+            for (i, (a, b)) in dense.iter().zip(on_dofs.iter()).enumerate() {
+                assert_eq!(a.to_bits(), b.to_bits(), "link {link_id}, entry {i}");
+            }
+        }
+        assert_eq!(legs_checked, 4, "four lower legs, each on 6 + 3 DOFs");
+    }
+}

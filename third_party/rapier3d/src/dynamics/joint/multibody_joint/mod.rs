@@ -25,6 +25,8 @@ mod multibody_joint_set;
 mod multibody_link;
 #[cfg(feature = "alloc")]
 mod multibody_workspace;
+#[cfg(feature = "alloc")]
+pub mod sparse_dofs;
 
 #[cfg(feature = "alloc")]
 mod multibody_ik;

@@ -1,5 +1,6 @@
 use super::multibody_link::{MultibodyLink, MultibodyLinkVec};
 use super::multibody_workspace::MultibodyWorkspace;
+use super::sparse_dofs::{add_gemm_tr_on_dofs, add_quadform_on_dofs, gemm_on_dofs};
 use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
 use crate::dynamics::solver::{GenericJointConstraint, WritebackId};
@@ -62,6 +63,22 @@ fn concat_rb_mass_matrix(
     result
 }
 
+fn link_dof_ranges(links: &MultibodyLinkVec, link_id: usize, out: &mut Vec<(usize, usize)>) {
+    out.clear();
+    let mut k = link_id;
+    loop {
+        let link = &links[k];
+        let ndofs = link.joint.ndofs();
+        if ndofs > 0 {
+            out.push((link.assembly_id, ndofs));
+        }
+        if k == 0 {
+            break;
+        }
+        k = link.parent_internal_id;
+    }
+}
+
 /// A holonomic coupling between two generalized coordinates of a single
 /// [`Multibody`], `q2 = coeff · q1 + offset`, enforced as a velocity-level
 /// equality constraint. This is how MuJoCo's `<equality><joint>` (a polynomial
@@ -105,6 +122,8 @@ pub struct Multibody {
     pub(crate) accelerations: DVector,
 
     body_jacobians: Vec<Jacobian<Real>>,
+    /// Scratch: the DOF ranges `(first, count)` of one link and its ancestors.
+    dof_ranges: Vec<(usize, usize)>,
     // NOTE: the mass matrices are dimensioned based on the non-kinematic degrees of
     //       freedoms only. The `Self::augmented_mass_permutation` sequence can be used to
     //       move dofs from/to a format that matches the augmented mass.
@@ -156,6 +175,7 @@ impl Multibody {
             frictions: DVector::zeros(0),
             accelerations: DVector::zeros(0),
             body_jacobians: Vec::new(),
+            dof_ranges: Vec::new(),
             augmented_mass: DMatrix::zeros(0, 0),
             inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
             acc_augmented_mass: DMatrix::zeros(0, 0),
@@ -393,6 +413,13 @@ impl Multibody {
     #[inline]
     pub fn link_mut(&mut self, id: usize) -> Option<&mut MultibodyLink> {
         self.links.get_mut(id)
+    }
+
+    /// Writes into `out` the DOF ranges `(first, count)` of link `link_id` and of its
+    /// ancestors: the only columns in which the link's body Jacobian can be nonzero
+    /// (`update_body_jacobians` builds it from its parent's and its own joint's columns).
+    pub fn link_dof_ranges(&self, link_id: usize, out: &mut Vec<(usize, usize)>) {
+        link_dof_ranges(&self.links, link_id, out)
     }
 
     /// The number of links on this multibody.
@@ -887,10 +914,21 @@ impl Multibody {
             let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
             #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
             let rb_mass_matrix = concat_rb_mass_matrix(rb_mass, augmented_inertia.into());
-            self.augmented_mass
-                .quadform(1.0, &rb_mass_matrix_wo_gyro, body_jacobian, 1.0);
-            self.acc_augmented_mass
-                .quadform(1.0, &rb_mass_matrix, body_jacobian, 1.0);
+            link_dof_ranges(&self.links, i, &mut self.dof_ranges);
+            // Below, the products with the body Jacobian skip its columns outside
+            // `dof_ranges`, which are zero: see `sparse_dofs`.
+            add_quadform_on_dofs(
+                &mut self.augmented_mass,
+                &rb_mass_matrix_wo_gyro,
+                body_jacobian,
+                &self.dof_ranges,
+            );
+            add_quadform_on_dofs(
+                &mut self.acc_augmented_mass,
+                &rb_mass_matrix,
+                body_jacobian,
+                &self.dof_ranges,
+            );
 
             /*
              *
@@ -918,28 +956,36 @@ impl Multibody {
 
                 // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
                 let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &shift_cross_tr, parent_coriolis_w, 1.0);
+                let dofs = &self.dof_ranges;
+                gemm_on_dofs(coriolis_v, 1.0, &shift_cross_tr, parent_coriolis_w, dofs);
 
                 // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
                 let dvel_cross = vect_to_na(
                     rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
                 )
                 .gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &dvel_cross, &parent_j_w, 1.0);
+                gemm_on_dofs(coriolis_v, 1.0, &dvel_cross, &parent_j_w, dofs);
 
                 // JDot/u * qdot
-                coriolis_v.gemm(
+                gemm_on_dofs(
+                    coriolis_v,
                     1.0,
                     &vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr(),
                     &parent_j_w,
-                    1.0,
+                    dofs,
                 );
-                coriolis_v.gemm(1.0, &(parent_w * shift_cross_tr), &parent_j_w, 1.0);
+                gemm_on_dofs(
+                    coriolis_v,
+                    1.0,
+                    &(parent_w * shift_cross_tr),
+                    &parent_j_w,
+                    dofs,
+                );
 
                 #[cfg(feature = "dim3")]
                 {
                     let vel_wrt_joint_w = vect_to_na(link.joint_velocity.angvel).gcross_matrix();
-                    coriolis_w.gemm(-1.0, &vel_wrt_joint_w, &parent_j_w, 1.0);
+                    gemm_on_dofs(coriolis_w, -1.0, &vel_wrt_joint_w, &parent_j_w, dofs);
                 }
 
                 // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
@@ -974,19 +1020,21 @@ impl Multibody {
 
             {
                 // [c3 - c2].gcross() * (JDot + JDot/u * qdot)
+                let dofs = &self.dof_ranges;
                 let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &shift_cross_tr, coriolis_w, 1.0);
+                gemm_on_dofs(coriolis_v, 1.0, &shift_cross_tr, coriolis_w, dofs);
 
                 // JDot
                 let dvel_cross = vect_to_na(rb.vels.angvel.gcross(link.shift23)).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &dvel_cross, &rb_j_w, 1.0);
+                gemm_on_dofs(coriolis_v, 1.0, &dvel_cross, &rb_j_w, dofs);
 
                 // JDot/u * qdot
-                coriolis_v.gemm(
+                gemm_on_dofs(
+                    coriolis_v,
                     1.0,
                     &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr),
                     &rb_j_w,
-                    1.0,
+                    dofs,
                 );
             }
 
@@ -1017,8 +1065,13 @@ impl Multibody {
                 i_coriolis_dt_w.gemm(dt, &mat_to_na(rb_inertia), coriolis_w, 0.0);
             }
 
-            self.acc_augmented_mass
-                .gemm_tr(1.0, rb_j, &self.i_coriolis_dt, 1.0);
+            // acc_augmented_mass += rb_jᵀ · i_coriolis_dt
+            add_gemm_tr_on_dofs(
+                &mut self.acc_augmented_mass,
+                &self.body_jacobians[i],
+                &self.i_coriolis_dt,
+                &self.dof_ranges,
+            );
         }
 
         /*

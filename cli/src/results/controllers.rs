@@ -9,6 +9,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use super::grid::terrain_grid;
+use super::number::fixed;
 use crate::eval::plots::{self, Curve, Panel};
 use experiment::eval::EvalReport;
 use experiment::eval::response::profile_bin_secs;
@@ -34,8 +35,10 @@ pub fn terrain_table(rows: &[(&str, &str)], terrains: &[String], cells: &[Cell])
             find(cells, name, t).map(|c| {
                 let s = &c.report.summary;
                 format!(
-                    "{}/{}, {:.3} m/s",
-                    s.successes, s.episodes, s.mean_speed_m_per_s.mean
+                    "{}/{}, {} m/s",
+                    s.successes,
+                    s.episodes,
+                    fixed(s.mean_speed_m_per_s.mean, 3)
                 )
             })
         },

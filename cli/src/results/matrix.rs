@@ -4,6 +4,7 @@
 use std::fmt::Write as _;
 
 use super::grid::terrain_grid;
+use super::number::fixed;
 use experiment::eval::EvalReport;
 
 /// One cell: a policy's evaluation on a terrain, with the commands that
@@ -49,13 +50,13 @@ pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> Str
             let s = &c.report.summary;
             let _ = writeln!(
                 out,
-                "| {p} | `{t}` | {}/{} | {:.2} ({:.2}-{:.2}) | {:.3} | {} | {:.2} | {} |",
+                "| {p} | `{t}` | {}/{} | {} ({}-{}) | {} | {} | {:.2} | {} |",
                 s.successes,
                 s.episodes,
-                s.distance_m.mean,
-                s.distance_m.min,
-                s.distance_m.max,
-                s.mean_speed_m_per_s.mean,
+                fixed(s.distance_m.mean, 2),
+                fixed(s.distance_m.min, 2),
+                fixed(s.distance_m.max, 2),
+                fixed(s.mean_speed_m_per_s.mean, 3),
                 s.cost_of_transport
                     .map_or("-".into(), |v| format!("{v:.2}")),
                 100.0 * s.foot_slip_m_per_phase.mean,

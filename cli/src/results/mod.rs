@@ -21,6 +21,7 @@ mod ablation;
 mod controllers;
 mod grid;
 mod matrix;
+mod number;
 mod paper_table;
 mod plan;
 

@@ -151,6 +151,9 @@ impl HeightGrid {
     }
 }
 
+/// Chords of a hill's rounded crest in its mesh and collider.
+const CREST_SEGMENTS: usize = 16;
+
 /// How far a region's relief solid reaches below z = 0, m (it overlaps the
 /// region's block, whose top is 1 cm below the relief's lowest point).
 const REGION_SOLID_BOTTOM_M: f64 = -0.02;
@@ -163,7 +166,10 @@ pub enum RegionRelief {
     /// random heights (`rough`)
     Grid(HeightGrid),
     /// `slope`: h = tan(angle) min(x - x0, x1 - x), up to the region's
-    /// middle and down to its end
+    /// middle and down to its end; with a rounded crest of length w, the
+    /// parabola h = tan (L/2 - w/4) - tan s^2 / w over |s| < w/2 around the
+    /// middle (s = x - middle, L = x1 - x0), which meets both slopes with
+    /// their height and gradient (radius of curvature w / (2 tan))
     Hill {
         /// the region's ends along x, m
         x_m: (f64, f64),
@@ -171,6 +177,8 @@ pub enum RegionRelief {
         y_m: (f64, f64),
         /// tangent of the inclination
         tan: f64,
+        /// length of the rounded crest, m (0: sharp; at most the region's)
+        crest_m: f64,
     },
     /// `steps`: h = height min(floor((x - x0) / run), floor((x1 - x) / run),
     /// levels), stairs up to the region's middle and down to its end;
@@ -202,10 +210,20 @@ impl RegionRelief {
         match self {
             Self::Grid(grid) => grid.height_m(x_m, y_m),
             Self::Hill {
-                x_m: (x0, x1), tan, ..
+                x_m: (x0, x1),
+                tan,
+                crest_m,
+                ..
             } => {
                 let x = x_m.clamp(*x0, *x1);
-                tan * (x - x0).min(x1 - x)
+                let from_end = (x - x0).min(x1 - x);
+                let (half, crest) = ((x1 - x0) / 2.0, crest_m.min(x1 - x0));
+                if crest > 0.0 && from_end > half - crest / 2.0 {
+                    let s = half - from_end;
+                    tan * (half - crest / 4.0) - tan * s * s / crest
+                } else {
+                    tan * from_end
+                }
             }
             Self::Stairs {
                 x_m: (x0, x1),
@@ -236,10 +254,25 @@ impl RegionRelief {
         match self {
             Self::Grid(_) => Vec::new(),
             Self::Hill {
-                x_m: (x0, x1), tan, ..
+                x_m: (x0, x1),
+                tan,
+                crest_m,
+                ..
             } => {
                 let middle = (x0 + x1) / 2.0;
-                vec![[*x0, 0.0], [middle, tan * (middle - x0)], [*x1, 0.0]]
+                let crest = crest_m.min(x1 - x0);
+                if crest == 0.0 {
+                    return vec![[*x0, 0.0], [middle, tan * (middle - x0)], [*x1, 0.0]];
+                }
+                // the parabola in chords, its ends on the slopes
+                let top = (0..=CREST_SEGMENTS).map(|k| {
+                    let x = middle - crest / 2.0 + crest * k as f64 / CREST_SEGMENTS as f64;
+                    [x, self.height_m(x, 0.0)]
+                });
+                std::iter::once([*x0, 0.0])
+                    .chain(top)
+                    .chain(std::iter::once([*x1, 0.0]))
+                    .collect()
             }
             Self::Stairs {
                 x_m: (x0, x1),

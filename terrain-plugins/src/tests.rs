@@ -920,6 +920,78 @@ fn tiles_on_a_hill_are_where_the_surface_says_and_meet_at_their_edges() {
 }
 
 #[test]
+fn a_rounded_crest_turns_the_slope_gradually_and_keeps_the_sides() {
+    // 4 m regions, hill in [3.9, 7.9], crest at 5.9; `crest=1m` rounds
+    // [5.4, 6.4] with the parabola that meets both 10-degree sides.
+    let tan = 10f64.to_radians().tan();
+    let (x0, x1, middle, crest) = (3.9, 7.9, 5.9, 1.0);
+    let rounded = |x: f64| {
+        let s = (x - middle).abs();
+        if s < crest / 2.0 {
+            tan * ((x1 - x0) / 2.0 - crest / 4.0) - tan * s * s / crest
+        } else {
+            tan * (x - x0).min(x1 - x)
+        }
+    };
+    for spec in [
+        "varying:4m:5cm,(elastic:5cm:slope=10):crest=1m",
+        "varying:4m:5cm,(slope:10):crest=1m",
+    ] {
+        let (world, terrain) = world_with(spec, 1);
+        let (a, b) = terrain.regions()[1].x_range_m;
+        assert!((a - x0).abs() < 1e-9 && (b - x1).abs() < 1e-9, "{spec}: {a} {b}");
+        for x in [4.3, 5.3, 5.6, 5.9, 6.25, 7.42] {
+            let rest = terrain.rest_height_m(x, 0.3);
+            // tiles rest on chords of 20 cm, the rigid hill on 16 chords
+            // of the crest: within 2 mm of the parabola
+            assert!(
+                (rest - rounded(x)).abs() < 2e-3,
+                "{spec} at {x}: rest {rest}, hill {}",
+                rounded(x)
+            );
+            let surface = terrain.surface_height_m(&world, x, 0.3);
+            assert!((surface - rest).abs() < 1e-5, "{spec} at {x}: {surface}");
+        }
+        // the top is lower than the sharp crest's by tan crest / 4
+        let sharp_top = tan * (middle - x0);
+        assert!(
+            (terrain.rest_height_m(middle, 0.0) - (sharp_top - tan * crest / 4.0)).abs() < 2e-3,
+            "{spec}"
+        );
+    }
+    // On tiles, neighbours turn by at most tan * 20 cm / 1 m, not by twice
+    // the slope at once.
+    let (_, terrain) = world_with("varying:4m:5cm,(elastic:5cm:slope=10):crest=1m", 1);
+    let (_, sharp) = world_with("varying:4m:5cm,(elastic:5cm:slope=10)", 1);
+    let gradients = |t: &dyn Terrain| -> Vec<f64> {
+        (0..20)
+            .map(|k| x0 + 0.1 + 0.2 * k as f64)
+            .map(|x| (t.rest_height_m(x + 0.05, 0.0) - t.rest_height_m(x - 0.05, 0.0)) / 0.1)
+            .collect()
+    };
+    let largest_turn = |g: Vec<f64>| {
+        g.windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .fold(0.0, f64::max)
+    };
+    let (turn, sharp_turn) = (
+        largest_turn(gradients(&*terrain)),
+        largest_turn(gradients(&*sharp)),
+    );
+    assert!((sharp_turn - 2.0 * tan).abs() < 1e-9, "sharp: {sharp_turn}");
+    assert!(turn < 0.2 * 2.0 * tan / crest + 1e-6, "rounded: {turn}");
+    // a crest in a region's own spec is refused: it belongs to the field
+    let err = Registry::builtin()
+        .create(
+            "varying:4m:5cm,(elastic:5cm:slope=10:crest=1m)",
+            &BuildContext::default(),
+        )
+        .err()
+        .expect("a region may not set the field's crest");
+    assert!(err.to_string().contains("crest"), "{err}");
+}
+
+#[test]
 fn a_tile_on_a_hill_sinks_its_depth_vertically_under_a_quarter_of_the_robot() {
     // A ball free along z only, as heavy as a quarter of the standing robot,
     // on a tile centre of a 10-degree side: the tilted face pushes it

@@ -179,6 +179,7 @@ impl FieldLayout {
                 x_m: x_range_m,
                 y_m: (-half_width_m, half_width_m),
                 tan: degrees.to_radians().tan(),
+                crest_m: params.crest_m,
             }));
             let spring_at = |depth_m: f64| {
                 let s = params.spring(depth_m, ctx);
@@ -211,6 +212,7 @@ impl FieldLayout {
                         x_m: x_range_m,
                         y_m: (-half_width_m, half_width_m),
                         tan: degrees.to_radians().tan(),
+                        crest_m: params.crest_m,
                     });
                     (surface.label(), model, None, 0.0)
                 }

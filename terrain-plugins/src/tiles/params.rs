@@ -79,6 +79,12 @@ pub fn tile_param_decls() -> Vec<ParamDecl> {
         friction_decl(),
         slope_decl(),
         ParamDecl::optional(
+            "crest",
+            Length,
+            V::Length(0.0),
+            "length of the rounded top of every hill (slope=), a parabola that turns the slope from up to down over this length instead of at a point, default 0 (a sharp crest)",
+        ),
+        ParamDecl::optional(
             "length",
             Length,
             V::Length(DEFAULT_LENGTH_M),
@@ -116,6 +122,8 @@ pub struct TileParams {
     pub friction: f64,
     /// inclination of the tiles' rest surface, degrees (0: flat)
     pub slope_deg: f64,
+    /// length of each hill's rounded top, m (0: a sharp crest)
+    pub crest_m: f64,
     /// extent along x, m
     pub length_m: f64,
     /// extent behind x = 0, m
@@ -135,6 +143,7 @@ impl TileParams {
             tile_mass_kg: spec.mass_kg("tile_mass"),
             friction: spec.number("friction"),
             slope_deg: spec.number("slope"),
+            crest_m: spec.length_m("crest"),
             length_m: spec.length_m("length"),
             back_m: spec.length_m("back"),
             width_m: spec.length_m("width"),
@@ -228,6 +237,7 @@ pub(super) fn default_params() -> TileParams {
         tile_mass_kg: 0.5,
         friction: 1.0,
         slope_deg: 0.0,
+        crest_m: 0.0,
         length_m: 40.0,
         back_m: 2.0,
         width_m: 3.0,

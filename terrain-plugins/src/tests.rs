@@ -939,7 +939,10 @@ fn a_rounded_crest_turns_the_slope_gradually_and_keeps_the_sides() {
     ] {
         let (world, terrain) = world_with(spec, 1);
         let (a, b) = terrain.regions()[1].x_range_m;
-        assert!((a - x0).abs() < 1e-9 && (b - x1).abs() < 1e-9, "{spec}: {a} {b}");
+        assert!(
+            (a - x0).abs() < 1e-9 && (b - x1).abs() < 1e-9,
+            "{spec}: {a} {b}"
+        );
         for x in [4.3, 5.3, 5.6, 5.9, 6.25, 7.42] {
             let rest = terrain.rest_height_m(x, 0.3);
             // tiles rest on chords of 20 cm, the rigid hill on 16 chords

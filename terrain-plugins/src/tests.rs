@@ -992,6 +992,14 @@ fn a_rounded_crest_turns_the_slope_gradually_and_keeps_the_sides() {
         .err()
         .expect("a region may not set the field's crest");
     assert!(err.to_string().contains("crest"), "{err}");
+    // and a crest where there is no hill would be ignored: refused
+    for spec in ["elastic:5cm:crest=1m", "varying:4m:5cm,rigid:crest=1m"] {
+        let err = Registry::builtin()
+            .create(spec, &BuildContext::default())
+            .err()
+            .expect("a crest needs a hill");
+        assert!(err.to_string().contains("has none"), "{spec}: {err}");
+    }
 }
 
 #[test]

@@ -64,7 +64,11 @@ impl TerrainPlugin for VaryingPlugin {
         }
         let surfaces = spec.surfaces("surfaces");
         let depths = surfaces.iter().map(Surface::max_depth_m);
-        let slopes = surfaces.iter().filter_map(|s| s.slope_deg);
+        // tiled hills and rigid `slope` regions
+        let slopes = surfaces.iter().filter_map(|s| match s.ground {
+            Ground::Slope { degrees } => Some(degrees),
+            _ => s.slope_deg,
+        });
         params.validate(depths, slopes)
     }
 

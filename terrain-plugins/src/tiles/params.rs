@@ -151,18 +151,27 @@ impl TileParams {
     }
 
     /// Checks the relations between the parameters and the given depths and
-    /// slopes (degrees; the terrain's own is checked too).
+    /// slopes (degrees, of the regions' hills; the terrain's own is checked
+    /// too).
     pub fn validate(
         &self,
         depths_m: impl IntoIterator<Item = f64>,
         slopes_deg: impl IntoIterator<Item = f64>,
     ) -> Result<(), String> {
+        let mut any_hill = false;
         for degrees in std::iter::once(self.slope_deg).chain(slopes_deg) {
             if degrees >= MAX_SLOPE_DEG {
                 return Err(format!(
                     "a slope of {degrees} degrees is too steep for tiles (below {MAX_SLOPE_DEG})"
                 ));
             }
+            any_hill |= degrees > 0.0;
+        }
+        if self.crest_m > 0.0 && !any_hill {
+            return Err(format!(
+                "crest={} rounds the crests of hills, and this terrain has none (give it or a region slope=<degrees>)",
+                format_length(self.crest_m)
+            ));
         }
         if self.gap_m >= self.pitch_m {
             return Err(format!(

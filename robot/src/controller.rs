@@ -528,23 +528,12 @@ impl PhaseController {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
-    use terrain_plugins::{BuildContext, Registry};
-
     use super::*;
     use crate::WorldConfig;
     use crate::task::{Task, TaskConfig};
 
     fn world_on(spec: &str) -> World {
-        let model = Arc::new(RobotModel::laikago());
-        let ctx = BuildContext {
-            supported_mass_kg: model.total_mass_kg(),
-            seed: 3,
-            ..BuildContext::default()
-        };
-        let terrain = Registry::builtin().create(spec, &ctx).unwrap();
-        World::new(model, terrain, WorldConfig::default(), [0.0, 0.0]).unwrap()
+        crate::test_worlds::laikago_on(spec, 3, [0.0, 0.0], WorldConfig::default())
     }
 
     /// A robot's loop (the module docs' loop, on a second world standing in

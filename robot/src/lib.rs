@@ -14,6 +14,9 @@ pub mod task;
 pub mod world;
 pub mod world_config;
 
+#[cfg(test)]
+mod test_worlds;
+
 pub use kinematics::{IkSolution, KinematicsError, LegKinematics};
 pub use model::{LAIKAGO_URDF, LegName, ModelError, RobotModel};
 pub use stand::{StandReport, stand};

@@ -92,21 +92,11 @@ pub fn stand_observed(
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
-    use terrain_plugins::{BuildContext, Registry};
-
     use super::*;
-    use crate::{RobotModel, WorldConfig};
+    use crate::WorldConfig;
 
     fn world_on(spec: &str, xy: [f64; 2], config: WorldConfig) -> World {
-        let model = Arc::new(RobotModel::laikago());
-        let ctx = BuildContext {
-            supported_mass_kg: model.total_mass_kg(),
-            ..BuildContext::default()
-        };
-        let terrain = Registry::builtin().create(spec, &ctx).unwrap();
-        World::new(model, terrain, config, xy).unwrap()
+        crate::test_worlds::laikago_on(spec, 0, xy, config)
     }
 
     fn stand_on(spec: &str, xy: [f64; 2], seconds: f64) -> StandReport {

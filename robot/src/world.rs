@@ -824,11 +824,8 @@ fn insert_robot(
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
     use nalgebra::{DMatrix, SMatrix};
     use terrain_plugins::rapier3d::dynamics::sparse_dofs::add_quadform_on_dofs;
-    use terrain_plugins::{BuildContext, Registry};
 
     use super::*;
 
@@ -839,13 +836,8 @@ mod tests {
         // Jacobian is zero elsewhere. Checked on the Laikago settling onto 5 cm
         // tiles with its legs moving, where the result must equal nalgebra's
         // dense quadratic form bit for bit.
-        let model = Arc::new(RobotModel::laikago());
-        let ctx = BuildContext {
-            supported_mass_kg: model.total_mass_kg(),
-            ..BuildContext::default()
-        };
-        let terrain = Registry::builtin().create("elastic:5cm", &ctx).unwrap();
-        let mut world = World::new(model, terrain, WorldConfig::default(), [0.0, 0.0]).unwrap();
+        let mut world =
+            crate::test_worlds::laikago_on("elastic:5cm", 0, [0.0, 0.0], WorldConfig::default());
         let mut targets = world.joint_targets_rad().to_vec();
         for (j, target) in targets.iter_mut().enumerate() {
             *target += 0.05 * (j as f64 - 5.5) / 5.5;

@@ -461,25 +461,15 @@ impl Task {
 
 #[cfg(test)]
 pub(crate) mod tests {
-    use std::sync::Arc;
-
     use nalgebra::{Isometry3, Vector3};
-    use terrain_plugins::{BuildContext, Registry};
 
     use super::*;
+    use crate::WorldConfig;
     use crate::action::SAMPLES_PER_PHASE;
     use crate::scripted::ScriptedCrawl;
-    use crate::{RobotModel, WorldConfig};
 
     pub(super) fn task_on(spec: &str, config: TaskConfig, seed: u64) -> Task {
-        let model = Arc::new(RobotModel::laikago());
-        let ctx = BuildContext {
-            supported_mass_kg: model.total_mass_kg(),
-            seed,
-            ..BuildContext::default()
-        };
-        let terrain = Registry::builtin().create(spec, &ctx).unwrap();
-        let world = World::new(model, terrain, WorldConfig::default(), [0.0, 0.0]).unwrap();
+        let world = crate::test_worlds::laikago_on(spec, seed, [0.0, 0.0], WorldConfig::default());
         Task::new(world, config, seed)
     }
 

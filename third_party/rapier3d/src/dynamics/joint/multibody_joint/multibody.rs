@@ -1068,7 +1068,7 @@ impl Multibody {
             // acc_augmented_mass += rb_jᵀ · i_coriolis_dt
             add_gemm_tr_on_dofs(
                 &mut self.acc_augmented_mass,
-                &self.body_jacobians[i],
+                rb_j,
                 &self.i_coriolis_dt,
                 &self.dof_ranges,
             );

@@ -23,7 +23,7 @@ fn a_tiny_plan_writes_table_one_fig_four_the_matrix_and_the_ablations() {
     std::fs::write(
         &plan,
         format!(
-            "[evaluation]\nepisodes = 1\nphases = 4\nseed_sets = [7, 9]\n\n[scenarios]\ntv2 = \"scripted\"\ntv8 = \"scripted\"\ntc2 = \"scripted\"\ntc5 = \"scripted\"\n\n[matrix]\npolicies = [\"scripted\", \"{rigid_policy}\"]\nterrains = [\"rigid\", \"rigid:friction=0.4\"]\n\n[[ablation]]\nvariant = \"full observation\"\nseed = 0\npolicy = \"{rigid_policy}\"\nterrain = \"rigid\"\n"
+            "[evaluation]\nepisodes = 1\nphases = 4\nseed_sets = [7, 9]\n\n[scenarios]\ntv2 = \"scripted\"\ntv8 = \"scripted\"\ntc2 = \"scripted\"\ntc5 = \"scripted\"\n\n[matrix]\npolicies = [\"scripted\", \"{rigid_policy}\"]\nterrains = [\"rigid\", \"rigid:friction=0.4\"]\n\n[[ablation]]\nvariant = \"full observation\"\nseed = 0\npolicy = \"{rigid_policy}\"\nterrain = \"rigid\"\n\n[[ablation]]\nvariant = \"full observation\"\nseed = 1\npolicy = \"{rigid_policy}\"\nterrain = \"rigid\"\n"
         ),
     )
     .unwrap();
@@ -83,8 +83,27 @@ fn a_tiny_plan_writes_table_one_fig_four_the_matrix_and_the_ablations() {
     assert!(matrix.contains(&format!("| {rigid_policy} |")), "{matrix}");
     let ablations = std::fs::read_to_string(out.join("ablations.md")).unwrap();
     assert!(
-        ablations.contains("| full observation | 0 |"),
-        "{ablations}"
+        ablations.contains("| full observation | 0 |")
+            && ablations.contains("| full observation | 1 |"),
+        "a row per training seed: {ablations}"
+    );
+    // the two seeds (here the same policy) pooled: each run's two
+    // episodes, then all four
+    let pooled = ablations
+        .lines()
+        .find(|l| l.starts_with("| full observation | 0, 1 | "))
+        .unwrap_or_else(|| panic!("a row per variant: {ablations}"));
+    let cells: Vec<&str> = pooled.split('|').map(str::trim).collect();
+    let per_seed: Vec<&str> = cells[3].split(", ").collect();
+    assert_eq!(per_seed.len(), 2, "{pooled}");
+    assert_eq!(per_seed[0], per_seed[1], "{pooled}");
+    let (one, two) = per_seed[0].split_once('/').unwrap();
+    let (all, four) = cells[4].split_once('/').unwrap();
+    assert_eq!((two, four), ("2", "4"), "{pooled}");
+    assert_eq!(
+        all.parse::<usize>().unwrap(),
+        2 * one.parse::<usize>().unwrap(),
+        "{pooled}"
     );
     assert_eq!(png_size(&out.join("ablation-curves.png")), (1024, 640));
 

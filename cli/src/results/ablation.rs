@@ -7,8 +7,10 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
+use super::number::fixed;
 use crate::eval::plots::{self, Curve};
 use experiment::eval::EvalReport;
+use experiment::eval::summary::Summary;
 
 /// One trained policy of a variant and its evaluation.
 pub struct Run<'a> {
@@ -31,18 +33,62 @@ pub fn markdown(runs: &[Run]) -> String {
         let s = &r.report.summary;
         let _ = writeln!(
             out,
-            "| {} | {} | {} | `{}` | {}/{} | {:.2} ({:.2}-{:.2}) | {:.1} | {} |",
+            "| {} | {} | {} | `{}` | {}/{} | {} ({}-{}) | {:.1} | {} |",
             r.variant,
             r.seed,
             r.policy,
             r.report.terrain,
             s.successes,
             s.episodes,
-            s.distance_m.mean,
-            s.distance_m.min,
-            s.distance_m.max,
+            fixed(s.distance_m.mean, 2),
+            fixed(s.distance_m.min, 2),
+            fixed(s.distance_m.max, 2),
             s.phases.mean,
             s.falls_text()
+        );
+    }
+    out
+}
+
+/// Each variant's runs pooled, one row per variant in the order of first
+/// appearance: its training seeds, the successes of each run and of all,
+/// and the distance and speed over every episode of its runs.
+pub fn variants_markdown(runs: &[Run]) -> String {
+    let mut variants: Vec<&str> = Vec::new();
+    for r in runs {
+        if !variants.contains(&r.variant) {
+            variants.push(r.variant);
+        }
+    }
+    let mut out = String::from(
+        "| variant | training seeds | success per seed | success | distance, m (mean; min-max) | speed, m/s (mean) | falls by cause |\n| --- | --- | --- | ---: | --- | ---: | --- |\n",
+    );
+    let phase_secs = robot::action::SAMPLES_PER_PHASE as f64 * robot::DT_SECS;
+    for variant in variants {
+        let own: Vec<&Run> = runs.iter().filter(|r| r.variant == variant).collect();
+        let episodes: Vec<_> = own
+            .iter()
+            .flat_map(|r| r.report.episodes.iter().cloned())
+            .collect();
+        let pooled = Summary::of(&episodes, phase_secs);
+        let list =
+            |f: &dyn Fn(&Run) -> String| own.iter().map(|r| f(r)).collect::<Vec<_>>().join(", ");
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {}/{} | {} ({}-{}) | {} | {} |",
+            variant,
+            list(&|r| r.seed.to_string()),
+            list(&|r| format!(
+                "{}/{}",
+                r.report.summary.successes, r.report.summary.episodes
+            )),
+            pooled.successes,
+            pooled.episodes,
+            fixed(pooled.distance_m.mean, 2),
+            fixed(pooled.distance_m.min, 2),
+            fixed(pooled.distance_m.max, 2),
+            fixed(pooled.mean_speed_m_per_s.mean, 3),
+            pooled.falls_text()
         );
     }
     out

@@ -461,6 +461,9 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
             })
             .collect();
         let mut page = header("Observation ablations", &plan.evaluation.seed_sets);
+        page.push_str("Each variant, its training seeds pooled:\n\n");
+        page.push_str(&ablation::variants_markdown(&runs));
+        page.push_str("\nEach training seed:\n\n");
         page.push_str(&ablation::markdown(&runs));
         page.push_str("\n![learning curves](ablation-curves.png)\n\nThe commands (one per seed set):\n\n```sh\n");
         for command in plan_cells.iter().flat_map(|c| c.commands(&plan)) {

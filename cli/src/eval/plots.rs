@@ -120,6 +120,34 @@ fn draw_legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<()> {
         .map_err(plot_error)
 }
 
+/// A tick label: a whole number with thousands separated ("100,000", not
+/// plotters' "100000.0"), anything else to at most two decimals without
+/// trailing zeros ("0.5", "1.25").
+fn tick_label(value: f64) -> String {
+    if value.fract() == 0.0 && value.abs() < 1e15 {
+        let digits = format!("{}", value.abs() as u64);
+        let mut grouped = String::new();
+        for (i, c) in digits.chars().enumerate() {
+            if i > 0 && (digits.len() - i) % 3 == 0 {
+                grouped.push(',');
+            }
+            grouped.push(c);
+        }
+        return if value < 0.0 {
+            format!("-{grouped}")
+        } else {
+            grouped
+        };
+    }
+    let text = format!("{value:.2}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" {
+        "0".to_string()
+    } else {
+        text.to_string()
+    }
+}
+
 /// A range around `values` with a margin (a unit range when empty or flat).
 fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values
@@ -361,6 +389,8 @@ pub fn panels(path: &Path, panels: &[Panel]) -> Result<()> {
                 .configure_mesh()
                 .x_desc(panel.x_desc)
                 .y_desc(panel.y_desc)
+                .x_label_formatter(&|x: &f64| tick_label(*x))
+                .y_label_formatter(&|y: &f64| tick_label(*y))
                 .label_style((FONT, 15))
                 .draw()
                 .map_err(plot_error)?;
@@ -381,4 +411,22 @@ pub fn panels(path: &Path, panels: &[Panel]) -> Result<()> {
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick_label;
+
+    #[test]
+    fn tick_labels_group_thousands_and_drop_trailing_zeros() {
+        assert_eq!(tick_label(100_000.0), "100,000");
+        assert_eq!(tick_label(1_234_567.0), "1,234,567");
+        assert_eq!(tick_label(999.0), "999");
+        assert_eq!(tick_label(0.0), "0");
+        assert_eq!(tick_label(-2500.0), "-2,500");
+        assert_eq!(tick_label(0.5), "0.5");
+        assert_eq!(tick_label(1.25), "1.25");
+        assert_eq!(tick_label(-0.001), "0");
+        assert_eq!(tick_label(3.14159), "3.14");
+    }
 }

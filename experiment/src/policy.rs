@@ -145,12 +145,13 @@ impl Policy {
     }
 
     /// Fits the scene's task settings and physics to the policy: a trained
-    /// policy runs with the observation layout, action prior and physics it
-    /// was trained with; the scripted crawl refuses an action prior (it is
+    /// policy runs with the observation layout, action prior, swing-height
+    /// origin and physics it was trained with (those of the stage of its
+    /// last iteration); the scripted crawl refuses an action prior (it is
     /// the prior). With `strict`, set when the task settings came from the
-    /// user's own experiment file, a checkpoint whose observation or prior
-    /// differs from that file's is an error naming the file instead of
-    /// being applied silently.
+    /// user's own experiment file, a checkpoint whose observation, prior or
+    /// swing-height origin differs from that file's is an error naming the
+    /// file instead of being applied silently.
     pub fn fit_scene(
         &self,
         task_config: &mut TaskConfig,
@@ -183,8 +184,19 @@ impl Policy {
                         task_config.action_prior.name()
                     );
                 }
+                if let Some(file) = strict
+                    && task_config.swing_height_reference != task.swing_height_reference
+                {
+                    bail!(
+                        "the checkpoint's actions count the swing foot's heights from swing_height_reference = {:?} but {} sets {:?}; evaluate it with --terrain, or with a config whose [task] matches the checkpoint's",
+                        task.swing_height_reference.name(),
+                        file.display(),
+                        task_config.swing_height_reference.name()
+                    );
+                }
                 task_config.observation = task.observation;
                 task_config.action_prior = task.action_prior;
+                task_config.swing_height_reference = task.swing_height_reference;
                 *physics = (**trained_in).clone();
             }
             Self::Scripted(_) if task_config.action_prior != ActionPrior::None => bail!(

@@ -123,9 +123,13 @@ pub struct Controller {
 
 impl Controller {
     fn of_task(task: &TaskConfig) -> PyResult<Self> {
-        let inner =
-            PhaseController::for_model(&RobotModel::laikago(), task.observation, task.action_prior)
-                .map_err(value_error)?;
+        let inner = PhaseController::for_model(
+            &RobotModel::laikago(),
+            task.observation,
+            task.action_prior,
+            task.swing_height_reference,
+        )
+        .map_err(value_error)?;
         Ok(Self {
             inner,
             needs_com: task.action_prior != robot::task::ActionPrior::None,
@@ -147,8 +151,8 @@ impl Controller {
 #[pymethods]
 impl Controller {
     /// The controller of the built-in Laikago with the task settings of
-    /// the experiment file `config` (its observation and action prior;
-    /// default: quadwalk's).
+    /// the experiment file `config` (its observation, action prior and
+    /// swing-height origin; default: quadwalk's).
     #[new]
     #[pyo3(signature = (config=None))]
     fn new(config: Option<&str>) -> PyResult<Self> {
@@ -157,7 +161,8 @@ impl Controller {
     }
 
     /// The controller a trained policy (an exported policy, a run or a
-    /// checkpoint) acts through: its observation layout and action prior.
+    /// checkpoint) acts through: its observation layout, action prior and
+    /// swing-height origin (those of its last stage).
     #[staticmethod]
     fn for_policy(path: &str) -> PyResult<Self> {
         let policy = experiment::Policy::from_arg(&registry(), path, None).map_err(value_error)?;

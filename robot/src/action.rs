@@ -8,7 +8,7 @@
 //! | --- | --- | --- | --- |
 //! | 0..9 | base position offset (x, y, z), m | P1, P2, P3 | P1, P2 in [-6, 6] cm; P3 in [-4, 8] cm, from the current position |
 //! | 9..18 | base orientation offset (roll, pitch, yaw), rad | P1, P2, P3 | [-0.3, 0.3] rad from the current orientation |
-//! | 18..27 | swing foot position (x frontal, y lateral, z height), m | P1, P2, P3 | x: [-15, 15] cm from the squat position (front feet), [delta - 15, delta + 15] cm (hind feet, delta = -2 cm); y: [-15, 15] cm from the squat position; z: [-15, 15] cm from the foot's current height |
+//! | 18..27 | swing foot position (x frontal, y lateral, z height), m | P1, P2, P3 | x: [-15, 15] cm from the squat position (front feet), [delta - 15, delta + 15] cm (hind feet, delta = -2 cm); y: [-15, 15] cm from the squat position; z: [-15, 15] cm from the foot's current height (the paper's; or from another origin, see `swing_height_reference`) |
 //!
 //! Each point's coordinates are consecutive (P1 x, P1 y, P1 z, P2 x, ...).
 //! The first control point P0 of every curve is the current value: zero
@@ -120,11 +120,14 @@ pub struct PhaseCurves {
 }
 
 /// Maps an action onto the curves. `swing_foot_now_m` is the swing foot's
-/// position at the phase start and `swing_foot_squat_m` its squat position
-/// (both base frame); `hind` says whether the swing leg is a hind leg.
+/// position at the phase start (the foot curve's P0), `swing_height_origin_m`
+/// the height its P1-P3 heights count from (the paper's: `swing_foot_now_m.z`)
+/// and `swing_foot_squat_m` its squat position (all base frame); `hind` says
+/// whether the swing leg is a hind leg.
 pub fn curves_from_action(
     action: &[f32],
     swing_foot_now_m: Vector3<f64>,
+    swing_height_origin_m: f64,
     swing_foot_squat_m: Vector3<f64>,
     hind: bool,
 ) -> PhaseCurves {
@@ -143,7 +146,7 @@ pub fn curves_from_action(
         Vector3::new(
             swing_foot_squat_m.x + offset.x,
             swing_foot_squat_m.y + offset.y,
-            swing_foot_now_m.z + offset.z,
+            swing_height_origin_m + offset.z,
         )
     };
     PhaseCurves {
@@ -173,9 +176,9 @@ mod tests {
         let now = Vector3::new(0.2, -0.2, -0.33);
         let squat = Vector3::new(0.2, -0.2, -0.35);
         for hind in [false, true] {
-            let lo = curves_from_action(&[-1.0; ACTION_SIZE], now, squat, hind);
-            let hi = curves_from_action(&[1.0; ACTION_SIZE], now, squat, hind);
-            let mid = curves_from_action(&[0.0; ACTION_SIZE], now, squat, hind);
+            let lo = curves_from_action(&[-1.0; ACTION_SIZE], now, now.z, squat, hind);
+            let hi = curves_from_action(&[1.0; ACTION_SIZE], now, now.z, squat, hind);
+            let mid = curves_from_action(&[0.0; ACTION_SIZE], now, now.z, squat, hind);
             let shift = if hind { -0.02 } else { 0.0 };
             for p in 1..3 {
                 assert_eq!(lo.base_position.points[p], Vector3::repeat(-0.06));
@@ -219,11 +222,32 @@ mod tests {
         let action: Vec<f32> = (0..ACTION_SIZE)
             .map(|i| ((i as f32) * 0.37).sin())
             .collect();
-        let c = curves_from_action(&action, now, Vector3::new(0.2, -0.2, -0.35), false);
+        let c = curves_from_action(&action, now, now.z, Vector3::new(0.2, -0.2, -0.35), false);
         assert_eq!(c.base_position.at(0.0), Vector3::zeros());
         assert_eq!(c.base_orientation.at(0.0), Vector3::zeros());
         assert!((c.swing_foot.at(0.0) - now).norm() < 1e-15);
         assert!((c.swing_foot.at(1.0) - c.swing_foot.points[3]).norm() < 1e-15);
+    }
+
+    #[test]
+    fn the_foot_heights_count_from_the_origin_and_the_curve_starts_at_the_foot() {
+        // a foot 9 cm below the origin (sunk since it landed): P1-P3 are
+        // raised by those 9 cm against the paper's origin, P0 stays put
+        let now = Vector3::new(0.25, -0.18, -0.40);
+        let squat = Vector3::new(0.2, -0.2, -0.35);
+        let action: Vec<f32> = (0..ACTION_SIZE)
+            .map(|i| ((i as f32) * 0.37).cos())
+            .collect();
+        let paper = curves_from_action(&action, now, now.z, squat, true);
+        let raised = curves_from_action(&action, now, now.z + 0.09, squat, true);
+        assert_eq!(raised.swing_foot.points[0], now);
+        for p in 1..4 {
+            let (a, b) = (paper.swing_foot.points[p], raised.swing_foot.points[p]);
+            assert_eq!((a.x, a.y), (b.x, b.y));
+            assert!((b.z - a.z - 0.09).abs() < 1e-12, "P{p}: {} {}", a.z, b.z);
+        }
+        assert_eq!(raised.base_position, paper.base_position);
+        assert_eq!(raised.base_orientation, paper.base_orientation);
     }
 
     #[test]

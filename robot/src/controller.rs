@@ -36,7 +36,9 @@ use crate::action::{ACTION_SIZE, CubicBezier, PhaseCurves, SAMPLES_PER_PHASE, cu
 use crate::kinematics::LegKinematics;
 use crate::model::{LegName, RobotModel};
 use crate::scripted::ScriptedCrawl;
-use crate::task::{ActionPrior, FOOT_HISTORY_PHASES, ObservationConfig, SWING_ORDER};
+use crate::task::{
+    ActionPrior, FOOT_HISTORY_PHASES, ObservationConfig, SWING_ORDER, SwingHeightReference,
+};
 use crate::world::{DT_SECS, World, WorldError, squat_rad_of};
 
 /// What the controller reads of the robot: the measured (or estimated)
@@ -149,6 +151,11 @@ struct Memory {
     /// feet in the base frame 1 and 2 steps ago
     feet_1_step_ago: [Vector3<f64>; 4],
     feet_2_steps_ago: [Vector3<f64>; 4],
+    /// each foot's world height when it last landed (at the start of the
+    /// phase after its swing; before its first swing, at the episode's
+    /// start), m: the origin of its next swing's heights with
+    /// [`SwingHeightReference::Touchdown`]
+    touchdown_z_world_m: [f64; 4],
 }
 
 /// The phase-level controller: observation, phase plan, joint targets.
@@ -161,19 +168,22 @@ pub struct PhaseController {
     squat_feet_in_base_m: [Vector3<f64>; 4],
     observation: ObservationConfig,
     action_prior: ActionPrior,
+    swing_height_reference: SwingHeightReference,
     memory: Memory,
 }
 
 impl PhaseController {
     /// The controller of `model` (its legs' kinematics `legs`, its squat
-    /// `squat_rad` in joint order), observing with `observation` and
-    /// adding `action_prior`'s action to the policy's.
+    /// `squat_rad` in joint order), observing with `observation`, adding
+    /// `action_prior`'s action to the policy's and counting the swing
+    /// foot's heights from `swing_height_reference`.
     pub fn new(
         model: &RobotModel,
         legs: [LegKinematics; 4],
         squat_rad: &[f64],
         observation: ObservationConfig,
         action_prior: ActionPrior,
+        swing_height_reference: SwingHeightReference,
     ) -> Self {
         for (kin, leg) in legs.iter().zip(&model.legs) {
             assert_eq!(
@@ -194,11 +204,13 @@ impl PhaseController {
             squat_feet_in_base_m,
             observation,
             action_prior,
+            swing_height_reference,
             memory: Memory {
                 phase: 0,
                 phase_start_feet: [feet; FOOT_HISTORY_PHASES],
                 feet_1_step_ago: feet,
                 feet_2_steps_ago: feet,
+                touchdown_z_world_m: [0.0; 4],
             },
         }
     }
@@ -209,6 +221,7 @@ impl PhaseController {
         model: &RobotModel,
         observation: ObservationConfig,
         action_prior: ActionPrior,
+        swing_height_reference: SwingHeightReference,
     ) -> Result<Self, WorldError> {
         let legs = LegKinematics::from_model(model)?;
         let squat_rad = squat_rad_of(model, &legs)?;
@@ -218,6 +231,7 @@ impl PhaseController {
             &squat_rad,
             observation,
             action_prior,
+            swing_height_reference,
         ))
     }
 
@@ -226,6 +240,7 @@ impl PhaseController {
         world: &World,
         observation: ObservationConfig,
         action_prior: ActionPrior,
+        swing_height_reference: SwingHeightReference,
     ) -> Self {
         Self::new(
             world.model(),
@@ -233,6 +248,7 @@ impl PhaseController {
             world.squat_rad(),
             observation,
             action_prior,
+            swing_height_reference,
         )
     }
 
@@ -291,7 +307,25 @@ impl PhaseController {
             phase_start_feet: [feet; FOOT_HISTORY_PHASES],
             feet_1_step_ago: feet,
             feet_2_steps_ago: feet,
+            touchdown_z_world_m: state.feet_in_world_m.map(|f| f.z),
         };
+    }
+
+    /// The height the swing foot's P1-P3 heights count from in the phase
+    /// about to run from `state`, base frame at the phase start, m: the
+    /// foot's height ([`SwingHeightReference::Foot`]), or the point above
+    /// (or below) the foot at the world height where it last landed
+    /// ([`SwingHeightReference::Touchdown`]).
+    pub fn swing_height_origin_m(&self, state: &RobotState) -> f64 {
+        let leg = self.swing_leg().index();
+        match self.swing_height_reference {
+            SwingHeightReference::Foot => state.feet_in_base_m()[leg].z,
+            SwingHeightReference::Touchdown => {
+                let foot = state.feet_in_world_m[leg];
+                let landed = Point3::new(foot.x, foot.y, self.memory.touchdown_z_world_m[leg]);
+                (state.base_pose.inverse() * landed).z
+            }
+        }
     }
 
     /// The world x, y the observation's goal blocks show for the current
@@ -401,6 +435,7 @@ impl PhaseController {
         let curves = curves_from_action(
             action,
             feet_base_start_m[swing.index()],
+            self.swing_height_origin_m(state),
             self.squat_feet_in_base_m[swing.index()],
             swing.is_hind(),
         );
@@ -516,12 +551,18 @@ impl PhaseController {
         self.memory.feet_1_step_ago = state_feet_in_base_m;
     }
 
-    /// Ends `plan`'s phase: its start joins the phase-start history and
-    /// the next phase is the one about to run.
+    /// Ends `plan`'s phase: its start joins the phase-start history, the
+    /// foot that swung in the phase before it is remembered where it
+    /// landed (its height at `plan`'s start), and the next phase is the one
+    /// about to run.
     pub fn end_phase(&mut self, plan: &PhasePlan) {
         let history = &mut self.memory.phase_start_feet;
         history.rotate_left(1);
         history[FOOT_HISTORY_PHASES - 1] = plan.feet_base_start_m;
+        if let Some(previous) = plan.phase.checked_sub(1) {
+            let landed = SWING_ORDER[previous % 4].index();
+            self.memory.touchdown_z_world_m[landed] = plan.feet_world_start_m[landed].z;
+        }
         self.memory.phase += 1;
     }
 }
@@ -538,16 +579,24 @@ mod tests {
 
     /// A robot's loop (the module docs' loop, on a second world standing in
     /// for the robot) gives the task's observations, joint targets and
-    /// motion bit for bit, for the goal the task heads for.
+    /// motion bit for bit, for the goal the task heads for, with either
+    /// origin of the swing foot's heights.
     #[test]
     fn the_controller_on_its_own_drives_a_world_as_the_task_does() {
-        let config = TaskConfig {
-            observation: ObservationConfig {
-                goal_line_ahead_m: Some(1.0),
-                ..ObservationConfig::default()
-            },
-            ..TaskConfig::default()
-        };
+        for swing_height_reference in [SwingHeightReference::Foot, SwingHeightReference::Touchdown]
+        {
+            drive_a_world_as_the_task_does(TaskConfig {
+                observation: ObservationConfig {
+                    goal_line_ahead_m: Some(1.0),
+                    ..ObservationConfig::default()
+                },
+                swing_height_reference,
+                ..TaskConfig::default()
+            });
+        }
+    }
+
+    fn drive_a_world_as_the_task_does(config: TaskConfig) {
         let start = [1.3, -0.4];
         let mut task = Task::new(world_on("elastic:5cm"), config.clone(), 0);
         let mut task_obs = vec![0.0; task.observation_size()];
@@ -559,8 +608,12 @@ mod tests {
         for _ in 0..(config.settle_secs / DT_SECS).round() as usize {
             robot.step();
         }
-        let mut controller =
-            PhaseController::of_world(&robot, config.observation, config.action_prior);
+        let mut controller = PhaseController::of_world(
+            &robot,
+            config.observation,
+            config.action_prior,
+            config.swing_height_reference,
+        );
         controller.begin_episode(&RobotState::of_world(&robot));
         let mut obs = vec![0.0; controller.observation_size()];
         let mut targets = robot.joint_targets_rad().to_vec();
@@ -597,6 +650,88 @@ mod tests {
         assert!(moved > 0.02, "the crawl walks: {moved} m");
     }
 
+    /// With [`SwingHeightReference::Touchdown`] the swing foot's P1-P3 are
+    /// those of the paper's origin raised by how far the foot has sunk
+    /// since it landed (along the base's z), P0 is the foot: on soil, where
+    /// the feet sink centimetres under the crawl, and on rigid ground,
+    /// where they do not.
+    #[test]
+    fn with_touchdown_a_sunk_foot_swings_from_where_it_landed() {
+        for (spec, least_deepest_m, most_deepest_m) in
+            [("soil:4cm", 0.02, 0.15), ("rigid", 0.0, 0.003)]
+        {
+            let mut world = world_on(spec);
+            world.reset_terrain();
+            world.reset_robot([0.0, 0.0], 0.0);
+            for _ in 0..120 {
+                world.step();
+            }
+            let controller = |reference| {
+                PhaseController::of_world(
+                    &world,
+                    ObservationConfig::default(),
+                    ActionPrior::None,
+                    reference,
+                )
+            };
+            let mut touchdown = controller(SwingHeightReference::Touchdown);
+            let mut paper = controller(SwingHeightReference::Foot);
+            let state = RobotState::of_world(&world);
+            touchdown.begin_episode(&state);
+            paper.begin_episode(&state);
+            // each foot's world height where it landed, kept by the test
+            let mut landed_z = state.feet_in_world_m.map(|f| f.z);
+            let crawl = ScriptedCrawl::default();
+            let mut targets = world.joint_targets_rad().to_vec();
+            let mut deepest_m: f64 = 0.0;
+            for phase in 0..12 {
+                let state = RobotState::of_world(&world);
+                if phase > 0 {
+                    let leg = SWING_ORDER[(phase - 1) % 4].index();
+                    landed_z[leg] = state.feet_in_world_m[leg].z;
+                }
+                let action =
+                    crawl.act_on(touchdown.phase(), &state, touchdown.squat_feet_in_base_m());
+                let plan = touchdown.plan_phase(&action, &state);
+                let same = paper.plan_phase(&action, &state);
+                let leg = plan.swing_leg.index();
+                let sink_m = landed_z[leg] - state.feet_in_world_m[leg].z;
+                let raise_m =
+                    touchdown.swing_height_origin_m(&state) - state.feet_in_base_m()[leg].z;
+                // the world's vertical seen in a base tilted by a few degrees
+                assert!(
+                    (raise_m - sink_m).abs() <= 0.02 * sink_m.abs() + 1e-9,
+                    "{spec} phase {phase}: raised {raise_m} m for a sink of {sink_m} m"
+                );
+                deepest_m = deepest_m.max(sink_m);
+                let (a, b) = (
+                    &same.curves.swing_foot.points,
+                    &plan.curves.swing_foot.points,
+                );
+                assert_eq!(a[0], b[0], "P0 is the foot");
+                for p in 1..4 {
+                    assert_eq!((a[p].x, a[p].y), (b[p].x, b[p].y));
+                    assert!(
+                        (b[p].z - a[p].z - raise_m).abs() < 1e-12,
+                        "{spec} phase {phase} P{p}"
+                    );
+                }
+                assert_eq!(plan.curves.base_position, same.curves.base_position);
+                for sample in 1..=SAMPLES_PER_PHASE {
+                    touchdown.joint_targets(&plan, sample, &mut targets);
+                    world.set_joint_targets_rad(&targets);
+                    world.step();
+                }
+                touchdown.end_phase(&plan);
+                paper.end_phase(&same);
+            }
+            assert!(
+                (least_deepest_m..=most_deepest_m).contains(&deepest_m),
+                "{spec}: the deepest sink since a landing {deepest_m} m"
+            );
+        }
+    }
+
     /// On a robot the feet come from the joint encoders: forward
     /// kinematics of rapier's joint angles puts them where rapier's bodies
     /// are, within float rounding of rapier's single-precision poses.
@@ -607,8 +742,12 @@ mod tests {
         for _ in 0..120 {
             world.step();
         }
-        let controller =
-            PhaseController::of_world(&world, ObservationConfig::default(), ActionPrior::None);
+        let controller = PhaseController::of_world(
+            &world,
+            ObservationConfig::default(),
+            ActionPrior::None,
+            SwingHeightReference::Foot,
+        );
         let feet = RobotState::feet_by_kinematics(
             controller.legs(),
             controller.leg_joints(),
@@ -623,8 +762,12 @@ mod tests {
     #[test]
     fn the_phase_start_history_keeps_the_three_newest_oldest_first() {
         let world = world_on("rigid");
-        let mut controller =
-            PhaseController::of_world(&world, ObservationConfig::default(), ActionPrior::None);
+        let mut controller = PhaseController::of_world(
+            &world,
+            ObservationConfig::default(),
+            ActionPrior::None,
+            SwingHeightReference::Foot,
+        );
         let state = RobotState::of_world(&world);
         controller.begin_episode(&state);
         let mut plan = controller.plan_phase(&[0.0; ACTION_SIZE], &state);

@@ -274,7 +274,7 @@ mod tests {
             let base = task.world().base_pose();
             let now = (base.inverse() * Point3::from(feet[swing.index()])).coords;
             let squat = task.squat_feet_in_base_m()[swing.index()];
-            let curves = curves_from_action(&action, now, squat, swing.is_hind());
+            let curves = curves_from_action(&action, now, now.z, squat, swing.is_hind());
             let top = curves.swing_foot.at(0.5);
             let end = curves.swing_foot.at(1.0);
             if lifts_in_phase(phase) {

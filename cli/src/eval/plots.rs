@@ -427,6 +427,6 @@ mod tests {
         assert_eq!(tick_label(0.5), "0.5");
         assert_eq!(tick_label(1.25), "1.25");
         assert_eq!(tick_label(-0.001), "0");
-        assert_eq!(tick_label(3.14159), "3.14");
+        assert_eq!(tick_label(1.23456), "1.23");
     }
 }

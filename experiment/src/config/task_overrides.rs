@@ -6,8 +6,9 @@
 //! VALUE is read as a TOML value (`0.15`, `[0.0, 1.0]`, `"feet"`); a word
 //! that is not one is a string, so `base_height_reference=feet` needs no
 //! quotes. The keys that set the networks' input (`observation`,
-//! `action_prior`) are refused: a trained policy brings its own, and the
-//! crawl reads none.
+//! `action_prior`) and how the actions are read (`swing_height_reference`)
+//! are refused: a trained policy brings its own, and the crawl reads no
+//! input.
 
 use robot::task::TaskConfig;
 
@@ -33,6 +34,11 @@ fn parse(text: &str) -> Result<(String, toml::Value), String> {
     {
         return Err(format!(
             "--task {text:?}: {fixed} sets the networks' input, which a trained policy brings with it (and the crawl reads none); it cannot be changed for a run"
+        ));
+    }
+    if key == "swing_height_reference" {
+        return Err(format!(
+            "--task {text:?}: swing_height_reference says how the policy's actions are read, which a trained policy brings with it; it cannot be changed for a run"
         ));
     }
     let value = toml::from_str::<toml::Table>(&format!("v = {value}"))
@@ -111,6 +117,10 @@ mod tests {
             (
                 "action_prior=scripted_crawl",
                 "action_prior sets the networks' input",
+            ),
+            (
+                "swing_height_reference=touchdown",
+                "how the policy's actions are read",
             ),
         ] {
             let err = apply_task_overrides(&task, &[text.to_string()]).unwrap_err();

@@ -27,6 +27,10 @@
 //!                                # it (soil, where the feet stand in their own holes)
 //! action_prior = "none"          # the paper's; or "scripted_crawl": the policy's
 //!                                # action is a residual on the crawl (+27 observations)
+//! swing_height_reference = "foot" # the paper's: the swing foot's height control
+//!                                # points count from its height at the phase start;
+//!                                # "touchdown": from its height when it last landed
+//!                                # (a foot sunk in soil lifts out of its hole)
 //!
 //! [task.observation]      # the paper's ablations
 //! foot_history = false    # drop the three previous phase-start foot positions (-36)
@@ -249,6 +253,48 @@ impl ActionPrior {
     }
 }
 
+/// What the swing foot's height control points (the action's z of P1-P3)
+/// count from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub enum SwingHeightReference {
+    /// The paper's: the foot's height at the phase start.
+    #[default]
+    Foot,
+    /// The foot's height when it last landed: the world height at which its
+    /// last swing ended (at the start of the phase after that swing), or its
+    /// height at the episode's start before its first swing. A foot that has
+    /// sunk since it landed (soil, a soft tile) has its curve raised by the
+    /// sink, so the same action lifts it out of its hole and lands it at
+    /// the height it would on firm ground; known to a robot from its own
+    /// foot positions, as the observation's are.
+    Touchdown,
+}
+
+impl SwingHeightReference {
+    /// Whether this is the paper's reference, the foot's current height.
+    pub fn is_foot(&self) -> bool {
+        *self == Self::Foot
+    }
+
+    /// The name used in configuration files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Foot => "foot",
+            Self::Touchdown => "touchdown",
+        }
+    }
+
+    /// Parses [`Self::name`]'s output.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "foot" => Some(Self::Foot),
+            "touchdown" => Some(Self::Touchdown),
+            _ => None,
+        }
+    }
+}
+
 /// Settings of the task (the `[task]` table; fields in the order an
 /// experiment file lists them).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -313,6 +359,10 @@ pub struct TaskConfig {
     pub balance_terms: BalanceTerms,
     /// what the policy's action is added to
     pub action_prior: ActionPrior,
+    /// what the swing foot's height control points count from (left out of
+    /// a written file when it is the paper's)
+    #[serde(skip_serializing_if = "SwingHeightReference::is_foot")]
+    pub swing_height_reference: SwingHeightReference,
     /// observation switches
     pub observation: ObservationConfig,
 }
@@ -446,6 +496,7 @@ impl Default for TaskConfig {
             orientation_lookahead_m: 0.0,
             balance_terms: BalanceTerms::default(),
             action_prior: ActionPrior::default(),
+            swing_height_reference: SwingHeightReference::default(),
         }
     }
 }
@@ -531,6 +582,23 @@ impl From<ActionPrior> for String {
     }
 }
 
+impl TryFrom<String> for SwingHeightReference {
+    type Error = TaskConfigError;
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        Self::from_name(&name).ok_or_else(|| {
+            TaskConfigError(format!(
+                "swing_height_reference must be \"foot\" (the paper's) or \"touchdown\", got {name:?}"
+            ))
+        })
+    }
+}
+
+impl From<SwingHeightReference> for String {
+    fn from(value: SwingHeightReference) -> Self {
+        value.name().to_string()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -552,6 +620,7 @@ mod tests {
             action_prior: ActionPrior::ScriptedCrawl,
             pitch_reference: PitchReference::Ground,
             base_height_reference: BaseHeightReference::Feet,
+            swing_height_reference: SwingHeightReference::Touchdown,
             observation: ObservationConfig {
                 foot_history_phases: 2,
                 goal_line_ahead_m: Some(1.0),
@@ -572,6 +641,7 @@ mod tests {
             "goal_line_ahead_m",
             "pitch_reference",
             "base_height_reference",
+            "swing_height_reference",
         ] {
             assert!(!plain.contains(key), "{key} in {plain}");
         }
@@ -610,6 +680,10 @@ mod tests {
             (
                 "base_height_reference = \"base\"",
                 "base_height_reference must be \"hips\" (the paper's) or \"feet\", got \"base\"",
+            ),
+            (
+                "swing_height_reference = \"ground\"",
+                "swing_height_reference must be \"foot\" (the paper's) or \"touchdown\", got \"ground\"",
             ),
             (
                 "distance_reward = \"backward\"",

@@ -117,8 +117,8 @@ mod reward;
 mod termination;
 
 pub use config::{
-    ActionPrior, BalanceTerms, BaseHeightReference, DistanceReward, PitchReference, TaskConfig,
-    TaskConfigError,
+    ActionPrior, BalanceTerms, BaseHeightReference, DistanceReward, PitchReference,
+    SwingHeightReference, TaskConfig, TaskConfigError,
 };
 pub use observation::{FOOT_HISTORY_PHASES, ObservationConfig};
 pub use phase::PhaseRun;
@@ -192,7 +192,12 @@ impl Task {
     /// Wraps a world; `seed` drives the start positions. Call [`Self::reset`]
     /// before the first phase.
     pub fn new(world: World, config: TaskConfig, seed: u64) -> Self {
-        let controller = PhaseController::of_world(&world, config.observation, config.action_prior);
+        let controller = PhaseController::of_world(
+            &world,
+            config.observation,
+            config.action_prior,
+            config.swing_height_reference,
+        );
         Self {
             world,
             config,

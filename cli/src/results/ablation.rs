@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-use super::number::fixed;
+use super::number::{fixed, mean_and_range};
 use crate::eval::plots::{self, Curve};
 use experiment::eval::EvalReport;
 use experiment::eval::summary::Summary;
@@ -33,16 +33,14 @@ pub fn markdown(runs: &[Run]) -> String {
         let s = &r.report.summary;
         let _ = writeln!(
             out,
-            "| {} | {} | {} | `{}` | {}/{} | {} ({}-{}) | {:.1} | {} |",
+            "| {} | {} | {} | `{}` | {}/{} | {} | {:.1} | {} |",
             r.variant,
             r.seed,
             r.policy,
             r.report.terrain,
             s.successes,
             s.episodes,
-            fixed(s.distance_m.mean, 2),
-            fixed(s.distance_m.min, 2),
-            fixed(s.distance_m.max, 2),
+            mean_and_range(&s.distance_m, 2),
             s.phases.mean,
             s.falls_text()
         );
@@ -75,7 +73,7 @@ pub fn variants_markdown(runs: &[Run]) -> String {
             |f: &dyn Fn(&Run) -> String| own.iter().map(|r| f(r)).collect::<Vec<_>>().join(", ");
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {}/{} | {} ({}-{}) | {} | {} |",
+            "| {} | {} | {} | {}/{} | {} | {} | {} |",
             variant,
             list(&|r| r.seed.to_string()),
             list(&|r| format!(
@@ -84,9 +82,7 @@ pub fn variants_markdown(runs: &[Run]) -> String {
             )),
             pooled.successes,
             pooled.episodes,
-            fixed(pooled.distance_m.mean, 2),
-            fixed(pooled.distance_m.min, 2),
-            fixed(pooled.distance_m.max, 2),
+            mean_and_range(&pooled.distance_m, 2),
             fixed(pooled.mean_speed_m_per_s.mean, 3),
             pooled.falls_text()
         );

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 
 use super::grid::terrain_grid;
-use super::number::fixed;
+use super::number::{fixed, mean_and_range};
 use experiment::eval::EvalReport;
 
 /// One cell: a policy's evaluation on a terrain, with the commands that
@@ -50,12 +50,10 @@ pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> Str
             let s = &c.report.summary;
             let _ = writeln!(
                 out,
-                "| {p} | `{t}` | {}/{} | {} ({}-{}) | {} | {} | {:.2} | {} |",
+                "| {p} | `{t}` | {}/{} | {} | {} | {} | {:.2} | {} |",
                 s.successes,
                 s.episodes,
-                fixed(s.distance_m.mean, 2),
-                fixed(s.distance_m.min, 2),
-                fixed(s.distance_m.max, 2),
+                mean_and_range(&s.distance_m, 2),
                 fixed(s.mean_speed_m_per_s.mean, 3),
                 s.cost_of_transport
                     .map_or("-".into(), |v| format!("{v:.2}")),

@@ -11,9 +11,20 @@ pub fn fixed(value: f64, decimals: usize) -> String {
     }
 }
 
+/// A spread as a table cell: "mean (min-max)", each to `decimals` places
+/// as [`fixed`] writes them.
+pub fn mean_and_range(spread: &experiment::eval::summary::Spread, decimals: usize) -> String {
+    format!(
+        "{} ({}-{})",
+        fixed(spread.mean, decimals),
+        fixed(spread.min, decimals),
+        fixed(spread.max, decimals)
+    )
+}
+
 #[cfg(test)]
 mod tests {
-    use super::fixed;
+    use super::{fixed, mean_and_range};
 
     #[test]
     fn a_value_that_rounds_to_zero_has_no_sign() {
@@ -23,5 +34,13 @@ mod tests {
         assert_eq!(fixed(0.0494, 3), "0.049");
         assert_eq!(fixed(-1.5, 1), "-1.5");
         assert_eq!(fixed(-0.4, 0), "0");
+    }
+
+    #[test]
+    fn a_spread_reads_mean_then_range() {
+        let mut spread = experiment::eval::summary::Spread::of(&[0.42, 19.9, 20.03]);
+        assert_eq!(mean_and_range(&spread, 2), "13.45 (0.42-20.03)");
+        spread.min = -0.001;
+        assert_eq!(mean_and_range(&spread, 2), "13.45 (0.00-20.03)");
     }
 }

@@ -265,9 +265,10 @@ pub enum SwingHeightReference {
     /// last swing ended (at the start of the phase after that swing), or its
     /// height at the episode's start before its first swing. A foot that has
     /// sunk since it landed (soil, a soft tile) has its curve raised by the
-    /// sink, so the same action lifts it out of its hole and lands it at
-    /// the height it would on firm ground; known to a robot from its own
-    /// foot positions, as the observation's are.
+    /// sink, so the same action lifts it out of its hole, and its landing
+    /// counts from the height of its last landing rather than from the
+    /// hole's bottom; known to a robot from its own foot positions, as the
+    /// observation's are.
     Touchdown,
 }
 

@@ -210,22 +210,12 @@ impl ScriptedCrawl {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::WorldConfig;
     use crate::action::curves_from_action;
     use crate::task::TaskConfig;
-    use crate::{RobotModel, World, WorldConfig};
-    use std::sync::Arc;
 
     fn task_on(spec: &str) -> (Task, Vec<f32>) {
-        let model = Arc::new(RobotModel::laikago());
-        let ctx = terrain_plugins::BuildContext {
-            supported_mass_kg: model.total_mass_kg(),
-            gravity_m_per_s2: 9.81,
-            seed: 0,
-        };
-        let terrain = terrain_plugins::Registry::builtin()
-            .create(spec, &ctx)
-            .unwrap();
-        let world = World::new(model, terrain, WorldConfig::default(), [0.0, 0.0]).unwrap();
+        let world = crate::test_worlds::laikago_on(spec, 0, [0.0, 0.0], WorldConfig::default());
         let mut task = Task::new(world, TaskConfig::default(), 0);
         let mut obs = vec![0.0; task.observation_size()];
         task.reset(&mut obs);

@@ -48,16 +48,22 @@ pub fn markdown(runs: &[Run]) -> String {
     out
 }
 
-/// Each variant's runs pooled, one row per variant in the order of first
-/// appearance: its training seeds, the successes of each run and of all,
-/// and the distance and speed over every episode of its runs.
-pub fn variants_markdown(runs: &[Run]) -> String {
+/// The variants of `runs`, each once, in the order of first appearance.
+fn variants<'a>(runs: &[Run<'a>]) -> Vec<&'a str> {
     let mut variants: Vec<&str> = Vec::new();
     for r in runs {
         if !variants.contains(&r.variant) {
             variants.push(r.variant);
         }
     }
+    variants
+}
+
+/// Each variant's runs pooled, one row per variant in the order of first
+/// appearance: its training seeds, the successes of each run and of all,
+/// and the distance and speed over every episode of its runs.
+pub fn variants_markdown(runs: &[Run]) -> String {
+    let variants = variants(runs);
     let mut out = String::from(
         "| variant | training seeds | success per seed | success | distance, m (mean; min-max) | speed, m/s (mean) | falls by cause |\n| --- | --- | --- | ---: | --- | ---: | --- |\n",
     );
@@ -114,12 +120,7 @@ pub fn metrics_file(policy: &str) -> Result<PathBuf> {
 /// The learning curves of every run, one colour per variant, drawn to
 /// `path`.
 pub fn curves_png(path: &Path, runs: &[Run]) -> Result<()> {
-    let mut variants: Vec<&str> = Vec::new();
-    for r in runs {
-        if !variants.contains(&r.variant) {
-            variants.push(r.variant);
-        }
-    }
+    let variants = variants(runs);
     let mut curves = Vec::new();
     for r in runs {
         let label = format!("{} (seed {})", r.variant, r.seed);

@@ -4,16 +4,23 @@
 //! Rerun's eye follows a tracked entity by the centre of its bounding box,
 //! keeping the direction and distance of the blueprint's eye position from
 //! its look target ([`EYE_OFFSET_M`]: 2.07 m behind, right of and above the
-//! base). When the entity's box is loaded as tracking starts, the viewer
-//! sets the distance to 1.5 times the radius of the box's bounding sphere
-//! instead. The robot's links are separate entities (the base's box alone
-//! would put the eye 0.4 m from the trunk, the legs outside the view), so
-//! the logger gives the eye an anchor of its own: two points of
-//! [`ANCHOR_RADIUS_M`] at opposite corners of a box around the base
-//! ([`ANCHOR_HALF_EXTENTS_M`], in the base's frame), which moves with the
-//! base and gives the same distance by that rule (2.05 m): far enough to
-//! see the whole robot, the tiles logged around it, the swing foot's target
-//! and the base's path behind it.
+//! base). When the entity is loaded as tracking starts, the viewer sets the
+//! distance to 1.5 times the radius of the bounding sphere of the entity's
+//! region of interest instead. The robot's links are separate entities (the
+//! base's box alone would put the eye 0.4 m from the trunk, the legs outside
+//! the view), so the logger gives the eye an anchor of its own: two points
+//! of [`ANCHOR_RADIUS_M`] in the base's frame ([`anchor_points_m`]), which
+//! move with the base. Which of the two rules applies depends on whether
+//! the viewer has the anchor's data when it first draws the view, which
+//! varies from one load to the next; both give the same distance (2.05 m
+//! by the anchor): far enough to see the whole robot, the tiles logged
+//! around it, the swing foot's target and the base's path behind it.
+//!
+//! The region of interest of a point cloud in Rerun 0.36 is not its
+//! bounding box but each axis's mean +- 2 standard deviations
+//! (`re_renderer::RobustBounds::from_points`): for two points at +-a it is
+//! +-2a. The anchor's points therefore sit at half the box they frame
+//! ([`ANCHOR_HALF_EXTENTS_M`]).
 //!
 //! The Rust SDK's [`Spatial3DView`] has no setter for its eye, so the eye
 //! (`EyeControls3D`) is logged into the blueprint's own store, at the path
@@ -32,8 +39,17 @@ use rerun::external::re_sdk_types::blueprint::archetypes::EyeControls3D;
 use crate::APPLICATION_ID;
 
 /// Half extents (x forward, y left, z up, in the base's frame) of the box
-/// whose opposite corners anchor the eye, m.
+/// the viewer frames when it places the eye by the anchor, m.
 pub(crate) const ANCHOR_HALF_EXTENTS_M: [f32; 3] = [0.9, 0.9, 0.5];
+
+/// The anchor's two points, in the base's frame, m: opposite corners of a
+/// box half the size of [`ANCHOR_HALF_EXTENTS_M`], so that the viewer's
+/// region of interest (mean +- 2 standard deviations per axis, the standard
+/// deviation of two points at +-a being a) is that box.
+pub(crate) fn anchor_points_m() -> [[f32; 3]; 2] {
+    let [x, y, z] = ANCHOR_HALF_EXTENTS_M.map(|h| h / 2.0);
+    [[-x, -y, -z], [x, y, z]]
+}
 
 /// The anchor's points are this small: they place the eye and are not
 /// meant to be seen, m.
@@ -129,12 +145,44 @@ pub(crate) fn send(rec: &RecordingStream, base_path: &str) -> RecordingStreamRes
 mod tests {
     use super::*;
 
+    /// Half extents of the region of interest Rerun 0.36's viewer gives a
+    /// point cloud centred on the origin: per axis, 2 standard deviations
+    /// of the points that lie within 2 standard deviations of the mean
+    /// (`re_renderer::RobustBounds::from_points`).
+    fn viewer_region_of_interest_half_extents_m(points: &[[f32; 3]]) -> [f32; 3] {
+        let sigma = |axis: usize, keep: &dyn Fn(&[f32; 3]) -> bool| {
+            let kept: Vec<f64> = points
+                .iter()
+                .filter(|p| keep(p))
+                .map(|p| f64::from(p[axis]))
+                .collect();
+            let n = kept.len() as f64;
+            let mean = kept.iter().sum::<f64>() / n;
+            (kept.iter().map(|v| v * v).sum::<f64>() / n - mean * mean).sqrt()
+        };
+        let first = [0, 1, 2].map(|axis| sigma(axis, &|_| true));
+        let within =
+            |p: &[f32; 3]| (0..3).all(|axis| f64::from(p[axis]).abs() <= 2.0 * first[axis]);
+        [0, 1, 2].map(|axis| (2.0 * sigma(axis, &within)) as f32)
+    }
+
+    #[test]
+    fn the_anchor_points_give_the_viewer_the_anchor_box() {
+        let half = viewer_region_of_interest_half_extents_m(&anchor_points_m());
+        for (got, want) in half.iter().zip(ANCHOR_HALF_EXTENTS_M) {
+            assert!(
+                (got - want).abs() < 1e-6,
+                "{half:?} against {ANCHOR_HALF_EXTENTS_M:?}"
+            );
+        }
+    }
+
     #[test]
     fn the_eye_stands_back_far_enough_for_the_robot_and_its_tiles() {
         // The Laikago is about 0.9 m from front to rear foot, and the tiles
         // are logged 0.7 m around the base: at 55 degrees of vertical field
         // of view the eye must be about 1.5 m away or more.
-        let [x, y, z] = ANCHOR_HALF_EXTENTS_M;
+        let [x, y, z] = viewer_region_of_interest_half_extents_m(&anchor_points_m());
         let anchored_m = 1.5 * (x * x + y * y + z * z).sqrt();
         let [x, y, z] = EYE_OFFSET_M;
         let offset_m = (x * x + y * y + z * z).sqrt();

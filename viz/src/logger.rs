@@ -314,8 +314,7 @@ impl RolloutLogger {
 
     fn log_robot_shapes(&mut self, model: &RobotModel) {
         let Some(rec) = self.rec.clone() else { return };
-        let [x, y, z] = crate::blueprint::ANCHOR_HALF_EXTENTS_M;
-        let anchor = rerun::Points3D::new([[-x, -y, -z], [x, y, z]])
+        let anchor = rerun::Points3D::new(crate::blueprint::anchor_points_m())
             .with_radii([crate::blueprint::ANCHOR_RADIUS_M]);
         self.check(rec.log_static(crate::blueprint::anchor_path(&self.body_paths[0]), &anchor));
         for (body, path) in model.bodies.iter().zip(self.body_paths.clone()) {

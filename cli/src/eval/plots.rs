@@ -341,7 +341,7 @@ pub fn landing_height_per_foot(path: &Path, title: &str, types: &[&TerrainSummar
     })
 }
 
-/// One line of [`curves`].
+/// One line of a [`Panel`].
 pub struct Curve {
     /// its legend entry
     pub label: String,
@@ -349,19 +349,6 @@ pub struct Curve {
     pub colour_index: usize,
     /// (x, y) in order of x
     pub points: Vec<(f64, f64)>,
-}
-
-/// Lines over a shared x axis (learning curves), one legend entry each.
-pub fn curves(path: &Path, title: &str, x_desc: &str, y_desc: &str, lines: &[Curve]) -> Result<()> {
-    panels(
-        path,
-        &[Panel {
-            title,
-            x_desc,
-            y_desc,
-            lines,
-        }],
-    )
 }
 
 /// One chart of [`panels`].

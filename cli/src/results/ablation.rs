@@ -117,30 +117,53 @@ pub fn metrics_file(policy: &str) -> Result<PathBuf> {
         })
 }
 
-/// The learning curves of every run, one colour per variant, drawn to
-/// `path`.
+/// Iterations in the trailing moving average of the learning curves: a
+/// training iteration's mean distance is over 16-40 episodes, and the
+/// variants' raw curves overlap beyond telling apart.
+const CURVE_SMOOTHING_ITERATIONS: usize = 20;
+
+/// The learning curves of every run, drawn to `path`: one panel per
+/// training seed, one colour per variant (the same in every panel).
 pub fn curves_png(path: &Path, runs: &[Run]) -> Result<()> {
     let variants = variants(runs);
-    let mut curves = Vec::new();
-    for r in runs {
-        let label = format!("{} (seed {})", r.variant, r.seed);
-        let run = crate::curves::read_metrics(&label, &metrics_file(r.policy)?, "mean_distance_m")?;
-        let points = run
-            .points
-            .iter()
-            .map(|&(phases, _, d)| (phases, d))
-            .collect();
-        curves.push(Curve {
-            label,
-            colour_index: variants.iter().position(|v| *v == r.variant).unwrap_or(0),
-            points,
-        });
+    let mut seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect();
+    seeds.sort_unstable();
+    seeds.dedup();
+    let mut panels = Vec::new();
+    for &seed in &seeds {
+        let mut curves = Vec::new();
+        for r in runs.iter().filter(|r| r.seed == seed) {
+            let name = format!("{} (seed {seed})", r.variant);
+            let run =
+                crate::curves::read_metrics(&name, &metrics_file(r.policy)?, "mean_distance_m")?;
+            let distances: Vec<f64> = run.points.iter().map(|p| p.2).collect();
+            curves.push(Curve {
+                label: r.variant.to_string(),
+                colour_index: variants.iter().position(|v| *v == r.variant).unwrap_or(0),
+                points: run
+                    .points
+                    .iter()
+                    .map(|p| p.0)
+                    .zip(crate::curves::smoothed(
+                        &distances,
+                        CURVE_SMOOTHING_ITERATIONS,
+                    ))
+                    .collect(),
+            });
+        }
+        panels.push((format!("training seed {seed}"), curves));
     }
-    plots::curves(
-        path,
-        "observation ablations: training episodes' mean distance",
-        "phases trained",
-        "mean distance per training episode (m)",
-        &curves,
-    )
+    let y_desc = format!(
+        "mean distance per training episode, m ({CURVE_SMOOTHING_ITERATIONS}-iteration mean)"
+    );
+    let panels: Vec<plots::Panel> = panels
+        .iter()
+        .map(|(title, lines)| plots::Panel {
+            title,
+            x_desc: "phases trained",
+            y_desc: &y_desc,
+            lines,
+        })
+        .collect();
+    plots::panels(path, &panels)
 }

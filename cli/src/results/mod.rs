@@ -465,7 +465,7 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
         page.push_str(&ablation::variants_markdown(&runs));
         page.push_str("\nEach training seed:\n\n");
         page.push_str(&ablation::markdown(&runs));
-        page.push_str("\n![learning curves](ablation-curves.png)\n\nThe commands (one per seed set):\n\n```sh\n");
+        page.push_str("\n![learning curves, one panel per training seed](ablation-curves.png)\n\nThe commands (one per seed set):\n\n```sh\n");
         for command in plan_cells.iter().flat_map(|c| c.commands(&plan)) {
             let _ = writeln!(page, "{command}");
         }

@@ -363,14 +363,20 @@ pub struct Panel<'a> {
     pub lines: &'a [Curve],
 }
 
-/// Charts of lines side by side in one figure.
+/// Charts of lines side by side in one figure, on one y range (each
+/// chart its own x range), so that their heights compare at a glance.
 pub fn panels(path: &Path, panels: &[Panel]) -> Result<()> {
+    let (y0, y1) = padded_range(
+        panels
+            .iter()
+            .flat_map(|p| p.lines.iter().flat_map(|c| c.points.iter()))
+            .map(|p| p.1),
+    );
     render(path, |root| {
         let areas = root.split_evenly((1, panels.len().max(1)));
         for (area, panel) in areas.iter().zip(panels) {
             let all = || panel.lines.iter().flat_map(|c| c.points.iter());
             let (x0, x1) = padded_range(all().map(|p| p.0));
-            let (y0, y1) = padded_range(all().map(|p| p.1));
             let mut chart = new_chart(area, panel.title, x0..x1, y0..y1)?;
             chart
                 .configure_mesh()

@@ -1,12 +1,12 @@
 //! The viewer's layout (Rerun blueprint): the 3D view of the robot beside
 //! the time series, with the 3D view's eye following the robot.
 //!
-//! Rerun's eye follows a tracked entity by the centre of its bounding box,
-//! keeping the direction and distance of the blueprint's eye position from
-//! its look target ([`EYE_OFFSET_M`]: 2.07 m behind, right of and above the
-//! base). When the entity is loaded as tracking starts, the viewer sets the
-//! distance to 1.5 times the radius of the bounding sphere of the entity's
-//! region of interest instead. The robot's links are separate entities (the
+//! Rerun's eye follows a tracked entity by the centre of its region of
+//! interest (below), keeping the direction and distance of the blueprint's
+//! eye position from its look target ([`EYE_OFFSET_M`]: 2.07 m behind,
+//! right of and above the base). When the entity is loaded as tracking
+//! starts, the viewer sets the distance to 1.5 times the radius of the
+//! bounding sphere of the entity's region of interest instead. The robot's links are separate entities (the
 //! base's box alone would put the eye 0.4 m from the trunk, the legs outside
 //! the view), so the logger gives the eye an anchor of its own: two points
 //! of [`ANCHOR_RADIUS_M`] in the base's frame ([`anchor_points_m`]), which

@@ -6,15 +6,16 @@
 //! eye position from its look target ([`EYE_OFFSET_M`]: 2.07 m behind,
 //! right of and above the base). When the entity is loaded as tracking
 //! starts, the viewer sets the distance to 1.5 times the radius of the
-//! bounding sphere of the entity's region of interest instead. The robot's links are separate entities (the
-//! base's box alone would put the eye 0.4 m from the trunk, the legs outside
-//! the view), so the logger gives the eye an anchor of its own: two points
-//! of [`ANCHOR_RADIUS_M`] in the base's frame ([`anchor_points_m`]), which
-//! move with the base. Which of the two rules applies depends on whether
-//! the viewer has the anchor's data when it first draws the view, which
-//! varies from one load to the next; both give the same distance (2.05 m
-//! by the anchor): far enough to see the whole robot, the tiles logged
-//! around it, the swing foot's target and the base's path behind it.
+//! bounding sphere of the entity's region of interest instead. The robot's
+//! links are separate entities (the base's box alone would put the eye 0.4
+//! m from the trunk, the legs outside the view), so the logger gives the
+//! eye an anchor of its own: two points of [`ANCHOR_RADIUS_M`] in the
+//! base's frame ([`anchor_points_m`]), which move with the base. Which of
+//! the two rules applies depends on whether the viewer has the anchor's
+//! data when it first draws the view, which varies from one load to the
+//! next; both give the same distance (2.05 m by the anchor): far enough to
+//! see the whole robot, the tiles logged around it, the swing foot's target
+//! and the base's path behind it.
 //!
 //! The region of interest of a point cloud in Rerun 0.36 is not its
 //! bounding box but each axis's mean +- 2 standard deviations

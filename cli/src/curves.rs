@@ -37,6 +37,23 @@ pub struct RunCurve {
     pub points: Vec<(f64, f64, f64)>,
 }
 
+impl RunCurve {
+    /// (x, metric) per iteration, x read off each point by `x` and the
+    /// metric [`smoothed`] over `window` iterations.
+    pub fn smoothed_points(
+        &self,
+        x: fn(&(f64, f64, f64)) -> f64,
+        window: usize,
+    ) -> Vec<(f64, f64)> {
+        let metric: Vec<f64> = self.points.iter().map(|p| p.2).collect();
+        self.points
+            .iter()
+            .map(x)
+            .zip(smoothed(&metric, window))
+            .collect()
+    }
+}
+
 /// Reads `metrics.jsonl` of `dir`: cumulative phases, cumulative wall time
 /// (each iteration's `phases / phases_per_s`) and `metric`.
 pub fn read_run(name: &str, dir: &Path, metric: &str) -> Result<RunCurve> {
@@ -108,18 +125,10 @@ pub fn curves(args: &CurvesArgs) -> Result<()> {
             read_run(&name, &dir, &args.metric)
         })
         .collect::<Result<_>>()?;
-    let line = |k: usize, run: &RunCurve, x: fn(&(f64, f64, f64)) -> f64| {
-        let ys: Vec<f64> = run.points.iter().map(|p| p.2).collect();
-        Curve {
-            label: run.name.clone(),
-            colour_index: k,
-            points: run
-                .points
-                .iter()
-                .map(x)
-                .zip(smoothed(&ys, args.smooth as usize))
-                .collect(),
-        }
+    let line = |k: usize, run: &RunCurve, x: fn(&(f64, f64, f64)) -> f64| Curve {
+        label: run.name.clone(),
+        colour_index: k,
+        points: run.smoothed_points(x, args.smooth as usize),
     };
     let by_phases: Vec<Curve> = runs
         .iter()

@@ -136,19 +136,10 @@ pub fn curves_png(path: &Path, runs: &[Run]) -> Result<()> {
             let name = format!("{} (seed {seed})", r.variant);
             let run =
                 crate::curves::read_metrics(&name, &metrics_file(r.policy)?, "mean_distance_m")?;
-            let distances: Vec<f64> = run.points.iter().map(|p| p.2).collect();
             curves.push(Curve {
                 label: r.variant.to_string(),
                 colour_index: variants.iter().position(|v| *v == r.variant).unwrap_or(0),
-                points: run
-                    .points
-                    .iter()
-                    .map(|p| p.0)
-                    .zip(crate::curves::smoothed(
-                        &distances,
-                        CURVE_SMOOTHING_ITERATIONS,
-                    ))
-                    .collect(),
+                points: run.smoothed_points(|p| p.0, CURVE_SMOOTHING_ITERATIONS),
             });
         }
         panels.push((format!("training seed {seed}"), curves));

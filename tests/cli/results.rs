@@ -139,6 +139,7 @@ fn a_tiny_plan_writes_table_one_fig_four_the_matrix_and_the_ablations() {
 
     // --only matrix: the matrix's page from the cache, the other pages and
     // the other sections' entries in results.json as they were
+    let whole = std::fs::read_to_string(out.join("results.json")).unwrap();
     std::fs::remove_file(out.join("table1.md")).unwrap();
     std::fs::remove_file(out.join("matrix.md")).unwrap();
     let mut only = args.to_vec();
@@ -152,9 +153,47 @@ fn a_tiny_plan_writes_table_one_fig_four_the_matrix_and_the_ablations() {
         matrix
     );
     assert!(!out.join("table1.md").exists(), "table1.md is not --only's");
-    let kept: serde_json::Value =
+    assert_eq!(
+        std::fs::read_to_string(out.join("results.json")).unwrap(),
+        whole
+    );
+    // the matrix's entries alone, then put back among the others: each
+    // where the whole run wrote it, results.json to the byte
+    std::fs::remove_file(out.join("results.json")).unwrap();
+    assert!(quadwalk(&only).status.success());
+    let alone: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
-    assert_eq!(kept.as_array().unwrap().len(), 8, "{kept}");
+    let alone = alone.as_array().unwrap();
+    assert_eq!(alone.len(), 4, "{alone:?}");
+    let all: serde_json::Value = serde_json::from_str(&whole).unwrap();
+    let others: Vec<&serde_json::Value> = all
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| !alone.contains(e))
+        .collect();
+    assert_eq!(others.len(), 4);
+    std::fs::write(
+        out.join("results.json"),
+        serde_json::to_string_pretty(&others).unwrap(),
+    )
+    .unwrap();
+    assert!(quadwalk(&only).status.success());
+    let written = std::fs::read_to_string(out.join("results.json")).unwrap();
+    let order = |text: &str| -> Vec<(String, String)> {
+        let entries: serde_json::Value = serde_json::from_str(text).unwrap();
+        entries
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| (e["policy"].to_string(), e["terrain"].to_string()))
+            .collect()
+    };
+    assert_eq!(order(&written), order(&whole));
+    assert!(
+        written == whole,
+        "results.json differs from the whole run's"
+    );
 
     // a section the plan does not have is named
     let mut absent = args.to_vec();

@@ -15,7 +15,8 @@
 //! kept under `--cache` and reused while the policy's weights and the
 //! plan's evaluation settings stay the same (`--fresh` runs it again).
 //! `--only SECTION` regenerates one section's pages and leaves the others,
-//! and their entries in `results.json`, as they were.
+//! and their entries in `results.json`, as they were; the entries stay in
+//! a whole run's order, so `results.json` is the same either way.
 
 mod ablation;
 mod controllers;
@@ -591,9 +592,36 @@ fn entry_key(entry: &serde_json::Value) -> [&serde_json::Value; 5] {
         .map(|k| entry.get(k).unwrap_or(&serde_json::Value::Null))
 }
 
+/// Where an entry of results.json goes: the order of [`Cell`], by which a
+/// whole run writes them (a cell's seed sets, all of one plan's length,
+/// order as the seeds they expand to).
+fn entry_order(entry: &serde_json::Value) -> (&str, &str, Vec<u64>, u64, Vec<&str>) {
+    let text = |k: &str| entry.get(k).and_then(|v| v.as_str()).unwrap_or_default();
+    let list = |k: &str| {
+        entry
+            .get(k)
+            .and_then(|v| v.as_array())
+            .map(Vec::as_slice)
+            .unwrap_or_default()
+    };
+    (
+        text("policy"),
+        text("terrain"),
+        list("seeds").iter().filter_map(|s| s.as_u64()).collect(),
+        entry
+            .get("phases")
+            .and_then(|v| v.as_u64())
+            .unwrap_or_default(),
+        list("task_overrides")
+            .iter()
+            .filter_map(|s| s.as_str())
+            .collect(),
+    )
+}
+
 /// The entries of `path` (an earlier results.json) with `fresh` ones in
-/// the places of those they replace, and the others after them: with
-/// `--only`, the other sections' entries stay, in their order.
+/// the places of those they replace: with `--only`, the other sections'
+/// entries stay, and every entry goes where a whole run puts it.
 fn kept_summaries(
     path: &Path,
     mut fresh: Vec<serde_json::Value>,
@@ -621,6 +649,7 @@ fn kept_summaries(
         })
         .collect();
     kept.extend(fresh);
+    kept.sort_by(|a, b| entry_order(a).cmp(&entry_order(b)));
     Ok(kept)
 }
 

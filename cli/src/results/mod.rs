@@ -586,16 +586,11 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
     Ok(())
 }
 
-/// What identifies an entry of results.json: the evaluation it summarises.
-fn entry_key(entry: &serde_json::Value) -> [&serde_json::Value; 5] {
-    ["policy", "terrain", "seeds", "phases", "task_overrides"]
-        .map(|k| entry.get(k).unwrap_or(&serde_json::Value::Null))
-}
-
-/// Where an entry of results.json goes: the order of [`Cell`], by which a
-/// whole run writes them (a cell's seed sets, all of one plan's length,
-/// order as the seeds they expand to).
-fn entry_order(entry: &serde_json::Value) -> (&str, &str, Vec<u64>, u64, Vec<&str>) {
+/// What identifies an entry of results.json (the evaluation it summarises)
+/// and where it goes: the order of [`Cell`], by which a whole run writes
+/// them (a cell's seed sets, all of one plan's length, order as the seeds
+/// they expand to).
+fn entry_key(entry: &serde_json::Value) -> (&str, &str, Vec<u64>, u64, Vec<&str>) {
     let text = |k: &str| entry.get(k).and_then(|v| v.as_str()).unwrap_or_default();
     let list = |k: &str| {
         entry
@@ -619,13 +614,10 @@ fn entry_order(entry: &serde_json::Value) -> (&str, &str, Vec<u64>, u64, Vec<&st
     )
 }
 
-/// The entries of `path` (an earlier results.json) with `fresh` ones in
-/// the places of those they replace: with `--only`, the other sections'
-/// entries stay, and every entry goes where a whole run puts it.
-fn kept_summaries(
-    path: &Path,
-    mut fresh: Vec<serde_json::Value>,
-) -> Result<Vec<serde_json::Value>> {
+/// The entries of `path` (an earlier results.json) that `fresh` does not
+/// replace, and `fresh`: with `--only`, the other sections' entries stay,
+/// and every entry goes where a whole run puts it.
+fn kept_summaries(path: &Path, fresh: Vec<serde_json::Value>) -> Result<Vec<serde_json::Value>> {
     let earlier: Vec<serde_json::Value> = match std::fs::read_to_string(path) {
         Ok(text) => serde_json::from_str(&text).with_context(|| {
             format!(
@@ -638,18 +630,10 @@ fn kept_summaries(
     };
     let mut kept: Vec<serde_json::Value> = earlier
         .into_iter()
-        .map(|old| {
-            match fresh
-                .iter()
-                .position(|new| entry_key(new) == entry_key(&old))
-            {
-                Some(k) => fresh.remove(k),
-                None => old,
-            }
-        })
+        .filter(|old| !fresh.iter().any(|new| entry_key(new) == entry_key(old)))
         .collect();
     kept.extend(fresh);
-    kept.sort_by(|a, b| entry_order(a).cmp(&entry_order(b)));
+    kept.sort_by(|a, b| entry_key(a).cmp(&entry_key(b)));
     Ok(kept)
 }
 

@@ -499,6 +499,29 @@ impl World {
         -rise.atan2(run)
     }
 
+    /// The inclination along the robot's heading of the ground its feet
+    /// stand on, radians, in the sense of the base's pitch (as
+    /// [`Self::ground_pitch_rad`]): -atan2(rise, run) from the surface
+    /// height now (holes included) below the mean of the rear feet to that
+    /// below the mean of the front feet. Where the ground does not give
+    /// this is the rest surface's inclination between the feet; on soil it
+    /// includes the holes the feet stand in, so a base that leans with the
+    /// front feet's deeper holes leans with its ground.
+    pub fn feet_ground_pitch_rad(&self) -> f64 {
+        // per pair (front, rear): the mean foot x, y and surface height, m
+        let (mut front, mut rear) = (Vector3::zeros(), Vector3::zeros());
+        for (leg, foot) in self.legs().iter().zip(self.feet_in_world_m()) {
+            let ground = Vector3::new(foot.x, foot.y, self.surface_height_m(foot.x, foot.y));
+            if leg.abduction_m.x > 0.0 {
+                front += ground / 2.0;
+            } else {
+                rear += ground / 2.0;
+            }
+        }
+        let run = (front.xy() - rear.xy()).norm();
+        -(front.z - rear.z).atan2(run)
+    }
+
     /// The mean of h_b, the base height the task's reward and termination
     /// use, m.
     pub fn base_height_m(&self) -> f64 {

@@ -20,7 +20,9 @@
 //!                                # (standing earns ~0); "paper": the paper's
 //! pitch_reference = "world"      # the paper's: the pitch termination measures from
 //!                                # the horizontal; "ground": from the rest surface's
-//!                                # inclination under the robot (slopes, hills)
+//!                                # inclination under the robot (slopes, hills);
+//!                                # "feet": from the ground under the feet now,
+//!                                # the holes they stand in included (soil)
 //! base_height_reference = "hips" # the paper's: the base-height termination and R_s
 //!                                # measure h_b, from the ground right below each hip;
 //!                                # "feet": from the ground under the feet that touch
@@ -145,6 +147,14 @@ pub enum PitchReference {
     /// same as `World` wherever the ground at rest is level (every flat
     /// terrain, tiles included).
     Ground,
+    /// The ground the feet stand on now (its inclination between the
+    /// surface below the front feet and below the rear feet, see
+    /// `World::feet_ground_pitch_rad`): on soil the holes the feet have
+    /// made count, so a base that leans with its front feet's deeper holes
+    /// is judged against that ground, as `base_height_reference = "feet"`
+    /// judges the base's height; the same as `Ground` on ground that does
+    /// not give, up to where the feet stand rather than the hips.
+    Feet,
 }
 
 impl PitchReference {
@@ -158,6 +168,7 @@ impl PitchReference {
         match self {
             Self::World => "world",
             Self::Ground => "ground",
+            Self::Feet => "feet",
         }
     }
 
@@ -166,6 +177,7 @@ impl PitchReference {
         match name {
             "world" => Some(Self::World),
             "ground" => Some(Self::Ground),
+            "feet" => Some(Self::Feet),
             _ => None,
         }
     }
@@ -537,7 +549,7 @@ impl TryFrom<String> for PitchReference {
     fn try_from(name: String) -> Result<Self, Self::Error> {
         Self::from_name(&name).ok_or_else(|| {
             TaskConfigError(format!(
-                "pitch_reference must be \"world\" (the paper's) or \"ground\", got {name:?}"
+                "pitch_reference must be \"world\" (the paper's), \"ground\" or \"feet\", got {name:?}"
             ))
         })
     }
@@ -676,7 +688,7 @@ mod tests {
             ),
             (
                 "pitch_reference = \"slope\"",
-                "pitch_reference must be \"world\" (the paper's) or \"ground\", got \"slope\"",
+                "pitch_reference must be \"world\" (the paper's), \"ground\" or \"feet\", got \"slope\"",
             ),
             (
                 "base_height_reference = \"base\"",

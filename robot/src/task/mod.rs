@@ -744,6 +744,7 @@ pub(crate) mod tests {
             for (reference, expected_fall) in [
                 (PitchReference::World, true),
                 (PitchReference::Ground, false),
+                (PitchReference::Feet, false),
             ] {
                 let mut task = task_on(
                     spec,
@@ -779,6 +780,81 @@ pub(crate) mod tests {
         // level ground at rest: no inclination, tiles included
         let task = task_on("elastic:5cm", TaskConfig::default(), 0);
         assert_eq!(task.world().ground_pitch_rad(), 0.0);
+    }
+
+    #[test]
+    fn with_the_feet_pitch_reference_a_base_leaning_into_fresh_soil_is_judged_against_its_feet() {
+        // Rigid ground, then soil: a seed whose first region after the start
+        // is soil puts a soil edge ahead of the robot.
+        let spec = "varying:4m:rigid,(soil:4cm)";
+        let (seed, edge_x_m) = (0..64)
+            .find_map(|seed| {
+                let task = task_on(spec, TaskConfig::default(), seed);
+                let regions = task.world().terrain().regions();
+                let next = regions.iter().find(|r| r.x_range_m.0 > 0.0)?;
+                let start = regions.iter().find(|r| r.x_range_m.1 == next.x_range_m.0)?;
+                (next.label.starts_with("soil") && start.label == "rigid")
+                    .then_some((seed, next.x_range_m.0))
+            })
+            .expect("a seed with soil after the rigid start");
+        let config = TaskConfig {
+            min_base_height_m: 0.01,
+            ..TaskConfig::default()
+        };
+        let mut task = task_on(spec, config, seed);
+        // the front feet 8 cm onto the soil, the rear ones on rigid ground
+        let front_foot_ahead_m =
+            task.world().feet_in_world_m()[0].x - task.world().base_pose().translation.x;
+        assert!(front_foot_ahead_m > 0.1, "{front_foot_ahead_m}");
+        task.world_mut()
+            .reset_robot([edge_x_m - front_foot_ahead_m + 0.08, 0.0], 0.0);
+        let until_secs = task.world().time_secs() + 1.0;
+        while task.world().time_secs() < until_secs {
+            task.world_mut().step();
+        }
+        let world = task.world();
+        let holes_m: Vec<f64> = world
+            .feet_in_world_m()
+            .iter()
+            .map(|f| world.rest_height_m(f.x, f.y) - world.surface_height_m(f.x, f.y))
+            .collect();
+        let (front, rear): (Vec<_>, Vec<_>) = world
+            .legs()
+            .iter()
+            .zip(&holes_m)
+            .partition(|(leg, _)| leg.abduction_m.x > 0.0);
+        assert!(front.iter().all(|(_, h)| **h > 0.01), "{holes_m:?}");
+        assert!(rear.iter().all(|(_, h)| h.abs() < 1e-9), "{holes_m:?}");
+        // the rest surface is level, the ground under the feet falls ahead,
+        // and the base leans with it (nose down: a positive pitch)
+        assert_eq!(world.ground_pitch_rad(), 0.0);
+        let feet_pitch = world.feet_ground_pitch_rad();
+        let (_, base_pitch, _) = world.base_pose().rotation.euler_angles();
+        assert!(feet_pitch > 0.02, "{}", feet_pitch.to_degrees());
+        assert!(base_pitch > 0.02, "{}", base_pitch.to_degrees());
+        let against_feet = base_pitch - feet_pitch;
+        assert!(
+            against_feet.abs() < 0.5 * base_pitch,
+            "base {} feet {}",
+            base_pitch.to_degrees(),
+            feet_pitch.to_degrees()
+        );
+        // A limit between the two: the horizontal calls it a fall, the feet's
+        // ground does not; the rest surface's inclination is the horizontal's.
+        task.config.max_pitch_deg = 0.5 * (base_pitch + against_feet.abs()).to_degrees();
+        for (reference, falls) in [
+            (PitchReference::World, true),
+            (PitchReference::Ground, true),
+            (PitchReference::Feet, false),
+        ] {
+            task.config.pitch_reference = reference;
+            let termination = task.check_termination(task.base_height_m());
+            assert_eq!(
+                matches!(termination, Some(Termination::PitchTooLarge { .. })),
+                falls,
+                "{reference:?}: {termination:?}"
+            );
+        }
     }
 
     #[test]

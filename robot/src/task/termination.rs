@@ -57,6 +57,7 @@ impl Task {
         let pitch = match self.config.pitch_reference {
             PitchReference::World => pitch,
             PitchReference::Ground => pitch - self.world.ground_pitch_rad(),
+            PitchReference::Feet => pitch - self.world.feet_ground_pitch_rad(),
         };
         if pitch.to_degrees().abs() > self.config.max_pitch_deg {
             return Some(Termination::PitchTooLarge {

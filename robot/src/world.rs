@@ -478,25 +478,10 @@ impl World {
     /// height below the mean of the front hips to that below the mean of
     /// the rear hips. 0 where the ground at rest is level.
     pub fn ground_pitch_rad(&self) -> f64 {
-        let (mut front, mut rear) = (Vec::with_capacity(2), Vec::with_capacity(2));
-        for (leg, hip) in self.legs().iter().zip(self.hips_in_world_m()) {
-            if leg.abduction_m.x > 0.0 {
-                front.push(hip);
-            } else {
-                rear.push(hip);
-            }
-        }
-        let mean = |points: &[Point3<f64>]| {
-            let n = points.len().max(1) as f64;
-            points
-                .iter()
-                .fold(Vector3::zeros(), |sum, p| sum + p.coords)
-                / n
-        };
-        let (front, rear) = (mean(&front), mean(&rear));
-        let run = (front.xy() - rear.xy()).norm();
-        let rise = self.rest_height_m(front.x, front.y) - self.rest_height_m(rear.x, rear.y);
-        -rise.atan2(run)
+        let (mut front, mut rear) = self.front_and_rear_means_m(self.hips_in_world_m());
+        front.z = self.rest_height_m(front.x, front.y);
+        rear.z = self.rest_height_m(rear.x, rear.y);
+        pitch_of_rise_rad(front, rear)
     }
 
     /// The inclination along the robot's heading of the ground its feet
@@ -508,18 +493,28 @@ impl World {
     /// includes the holes the feet stand in, so a base that leans with the
     /// front feet's deeper holes leans with its ground.
     pub fn feet_ground_pitch_rad(&self) -> f64 {
-        // per pair (front, rear): the mean foot x, y and surface height, m
-        let (mut front, mut rear) = (Vector3::zeros(), Vector3::zeros());
-        for (leg, foot) in self.legs().iter().zip(self.feet_in_world_m()) {
-            let ground = Vector3::new(foot.x, foot.y, self.surface_height_m(foot.x, foot.y));
-            if leg.abduction_m.x > 0.0 {
-                front += ground / 2.0;
+        let ground_under_feet = self
+            .feet_in_world_m()
+            .map(|foot| Point3::new(foot.x, foot.y, self.surface_height_m(foot.x, foot.y)));
+        let (front, rear) = self.front_and_rear_means_m(ground_under_feet);
+        pitch_of_rise_rad(front, rear)
+    }
+
+    /// The means of the front legs' and of the rear legs' points (one per
+    /// leg, in the legs' order), m.
+    fn front_and_rear_means_m(&self, points: [Point3<f64>; 4]) -> (Vector3<f64>, Vector3<f64>) {
+        let (mut front, mut rear) = ((Vector3::zeros(), 0), (Vector3::zeros(), 0));
+        for (leg, point) in self.legs().iter().zip(points) {
+            let pair = if leg.abduction_m.x > 0.0 {
+                &mut front
             } else {
-                rear += ground / 2.0;
-            }
+                &mut rear
+            };
+            pair.0 += point.coords;
+            pair.1 += 1;
         }
-        let run = (front.xy() - rear.xy()).norm();
-        -(front.z - rear.z).atan2(run)
+        let mean = |(sum, n): (Vector3<f64>, usize)| sum / n.max(1) as f64;
+        (mean(front), mean(rear))
     }
 
     /// The mean of h_b, the base height the task's reward and termination
@@ -843,6 +838,13 @@ fn insert_robot(
         joint_links,
         colliders,
     })
+}
+
+/// -atan2(rise, run) from `rear` to `front` (world frame, m): the pitch, in
+/// the sense of the base's, of a line that rises toward the front.
+fn pitch_of_rise_rad(front: Vector3<f64>, rear: Vector3<f64>) -> f64 {
+    let run = (front.xy() - rear.xy()).norm();
+    -(front.z - rear.z).atan2(run)
 }
 
 #[cfg(test)]

@@ -41,6 +41,22 @@ pub trait Algorithm: Send {
     /// that checkpoints carry (a curriculum stage's own rate).
     fn set_learning_rate(&mut self, learning_rate: f64) -> Result<(), LearnError>;
 
+    /// Gives the critic `privileged_size` privileged values after the
+    /// observation from the next iteration on (a curriculum stage that
+    /// turns `privileged_critic` on), its values unchanged until training
+    /// moves them; nothing changes when it has them already. A learner
+    /// without an asymmetric critic refuses any.
+    fn widen_critic(&mut self, privileged_size: usize) -> Result<(), LearnError> {
+        if privileged_size == 0 {
+            Ok(())
+        } else {
+            Err(LearnError::Config(format!(
+                "{}'s critics see what its actor sees: {privileged_size} privileged observation values (an asymmetric critic) are PPO's only",
+                self.name()
+            )))
+        }
+    }
+
     /// The deterministic actions for raw observations `k x O`, in [-1, 1].
     fn act_deterministic(&self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError>;
 

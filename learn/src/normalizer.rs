@@ -3,6 +3,12 @@
 //! `f64`. Normalised values are `clip((x - mean) / sqrt(var + 1e-8), +-clip)`.
 //! The state is part of a checkpoint; a trained policy is only right with
 //! the normaliser it was trained with.
+//!
+//! Values appended to the observation mid-run ([`ObsNormalizer::append`],
+//! a critic given privileged values from a curriculum stage on) keep their
+//! own count from 0, so their statistics are theirs alone from the first
+//! batch instead of being outweighed by the observations seen before they
+//! existed.
 
 use crate::LearnError;
 
@@ -17,6 +23,19 @@ pub struct ObsNormalizer {
     pub count: f64,
     /// normalised values are clipped to +- this
     pub clip: f64,
+    /// values appended after the first observations: where they start and
+    /// how many observations of them were seen
+    pub appended: Option<Appended>,
+}
+
+/// The values from `from` on were appended to the observation mid-run and
+/// have been seen `count` times.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Appended {
+    /// index of the first appended value
+    pub from: usize,
+    /// observations of them seen
+    pub count: f64,
 }
 
 const EPSILON: f64 = 1e-8;
@@ -29,6 +48,29 @@ impl ObsNormalizer {
             var: vec![1.0; size],
             count: 0.0,
             clip,
+            appended: None,
+        }
+    }
+
+    /// Appends `extra` values to the observation, mean 0 and variance 1
+    /// until their first batch, counted from 0 on their own.
+    pub fn append(&mut self, extra: usize) {
+        if extra == 0 {
+            return;
+        }
+        let from = self.size();
+        self.mean.extend(std::iter::repeat_n(0.0, extra));
+        self.var.extend(std::iter::repeat_n(1.0, extra));
+        if self.appended.is_none() {
+            self.appended = Some(Appended { from, count: 0.0 });
+        }
+    }
+
+    /// The count of value `d`'s statistics.
+    fn count_of(&self, d: usize) -> f64 {
+        match self.appended {
+            Some(a) if d >= a.from => a.count,
+            _ => self.count,
         }
     }
 
@@ -49,14 +91,17 @@ impl ObsNormalizer {
             let column = batch.iter().skip(d).step_by(size).map(|&x| f64::from(x));
             let batch_mean = column.clone().sum::<f64>() / k;
             let batch_var = column.map(|x| (x - batch_mean).powi(2)).sum::<f64>() / k;
-            let total = self.count + k;
+            let count = self.count_of(d);
+            let total = count + k;
             let delta = batch_mean - self.mean[d];
-            let m2 =
-                self.var[d] * self.count + batch_var * k + delta * delta * self.count * k / total;
+            let m2 = self.var[d] * count + batch_var * k + delta * delta * count * k / total;
             self.mean[d] += delta * k / total;
             self.var[d] = m2 / total;
         }
         self.count += k;
+        if let Some(appended) = &mut self.appended {
+            appended.count += k;
+        }
     }
 
     /// The statistics of the first `n` values only (what a policy that sees
@@ -67,6 +112,7 @@ impl ObsNormalizer {
             var: self.var[..n].to_vec(),
             count: self.count,
             clip: self.clip,
+            appended: self.appended.filter(|a| a.from < n),
         }
     }
 
@@ -114,7 +160,26 @@ impl ObsNormalizer {
             var,
             count,
             clip,
+            appended: None,
         })
+    }
+
+    /// With the stored [`Appended`] state of a checkpoint, checked.
+    pub fn with_appended(mut self, appended: Appended) -> Result<Self, LearnError> {
+        let fits = appended.from > 0
+            && appended.from < self.size()
+            && appended.count.is_finite()
+            && appended.count >= 0.0;
+        if !fits {
+            return Err(LearnError::Checkpoint(format!(
+                "normaliser: appended values from {} seen {} times do not fit {} values",
+                appended.from,
+                appended.count,
+                self.size()
+            )));
+        }
+        self.appended = Some(appended);
+        Ok(self)
     }
 }
 
@@ -161,6 +226,61 @@ mod tests {
         assert_eq!(x[1], 0.0);
         assert_eq!(x[2], 3.0, "clipped");
         assert_eq!(x[3], 3.0, "a constant dimension saturates at the clip");
+    }
+
+    /// Appended values get their batch's statistics from their first
+    /// batch (their own count starts at 0), the values before them go on
+    /// with theirs, and both equal what one normaliser over each part alone
+    /// would have.
+    #[test]
+    fn appended_values_count_from_their_first_batch() {
+        let early: Vec<f32> = (0..200).map(|i| (i % 7) as f32).collect();
+        let mut n = ObsNormalizer::new(2, 10.0);
+        n.update(&early);
+        n.append(1);
+        assert_eq!(n.size(), 3);
+        let late: Vec<f32> = (0..60)
+            .map(|i| {
+                if i % 3 == 2 {
+                    0.05 * (i % 4) as f32
+                } else {
+                    (i % 5) as f32
+                }
+            })
+            .collect();
+        let mut alone = ObsNormalizer::new(1, 10.0);
+        let mut leading = ObsNormalizer::new(2, 10.0);
+        leading.update(&early);
+        for rows in late.chunks(12) {
+            n.update(rows);
+            let third: Vec<f32> = rows.iter().skip(2).step_by(3).copied().collect();
+            alone.update(&third);
+            let first_two: Vec<f32> = rows
+                .chunks(3)
+                .flat_map(|r| r[..2].iter().copied())
+                .collect();
+            leading.update(&first_two);
+        }
+        assert!((n.mean[2] - alone.mean[0]).abs() < 1e-12);
+        assert!((n.var[2] - alone.var[0]).abs() < 1e-12);
+        assert!(
+            n.var[2] < 0.01,
+            "the appended values' own spread: {}",
+            n.var[2]
+        );
+        for d in 0..2 {
+            assert!((n.mean[d] - leading.mean[d]).abs() < 1e-12);
+            assert!((n.var[d] - leading.var[d]).abs() < 1e-12);
+        }
+        assert_eq!(n.count, 120.0);
+        assert_eq!(
+            n.appended,
+            Some(Appended {
+                from: 2,
+                count: 20.0
+            })
+        );
+        assert_eq!(n.leading(2).appended, None);
     }
 
     #[test]

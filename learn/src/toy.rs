@@ -419,6 +419,74 @@ mod tests {
         );
     }
 
+    /// A critic given the privileged value mid-run (a curriculum stage that
+    /// turns it on): the actor acts as before, the critic learns weights
+    /// for the new input, the normaliser counts it from its first batch,
+    /// and a checkpoint after the widening resumes bit for bit.
+    #[test]
+    fn a_critic_widened_mid_run_learns_the_new_value_and_resumes() {
+        use crate::checkpoint::write_dir_atomically;
+        let make = || {
+            let mut t = Trainer::new(toy_config(), 4, 2, 5).unwrap();
+            let mut env = PointMass::new(16, 25);
+            for _ in 0..5 {
+                t.iterate(&mut env).unwrap();
+            }
+            let obs = [0.1f32, -0.2, 0.5, -0.5];
+            let before = t.act_deterministic(&obs).unwrap();
+            t.widen_critic(1).unwrap();
+            assert_eq!(t.act_deterministic(&obs).unwrap(), before);
+            assert_eq!((t.policy.obs_size(), t.policy.privileged_size()), (4, 1));
+            t
+        };
+        let mut straight = make();
+        let seen_before = straight.normalizer.count;
+        let mut env = PointMass::with_time_for_critic(16, 25);
+        for _ in 0..6 {
+            straight.iterate(&mut env).unwrap();
+        }
+        let appended = straight.normalizer.appended.unwrap();
+        assert_eq!(appended.from, 4);
+        assert_eq!(appended.count, (6 * 16 * 50) as f64);
+        assert_eq!(straight.normalizer.count, seen_before + appended.count);
+        // the time left (0..1 over an episode) has its own spread, not one
+        // diluted by the observations seen before it existed
+        assert!(
+            (straight.normalizer.var[4] - 1.0 / 12.0).abs() < 0.02,
+            "{}",
+            straight.normalizer.var[4]
+        );
+        let new_row: Vec<f32> = straight.policy.critic.layers[0]
+            .weight
+            .as_tensor()
+            .get(4)
+            .unwrap()
+            .to_vec1()
+            .unwrap();
+        assert!(new_row.iter().any(|w| w.abs() > 1e-4), "{new_row:?}");
+        // widening again to the same size changes nothing; narrowing is refused
+        straight.widen_critic(1).unwrap();
+        let err = straight.widen_critic(0).unwrap_err().to_string();
+        assert!(err.contains("cannot be cut"), "{err}");
+        // resume after the widening equals the straight run
+        let tmp = tempfile::tempdir().unwrap();
+        let mut first = make();
+        let mut env = PointMass::with_time_for_critic(16, 25);
+        for _ in 0..4 {
+            first.iterate(&mut env).unwrap();
+        }
+        write_dir_atomically(&tmp.path().join("c"), &first.checkpoint_files().unwrap()).unwrap();
+        let mut resumed = Trainer::load(&tmp.path().join("c")).unwrap();
+        assert_eq!(resumed.normalizer, first.normalizer);
+        for _ in 0..2 {
+            resumed.iterate(&mut env).unwrap();
+        }
+        assert_eq!(
+            resumed.checkpoint_files().unwrap(),
+            straight.checkpoint_files().unwrap()
+        );
+    }
+
     #[test]
     fn a_mismatched_environment_is_refused() {
         let mut t = Trainer::new(

@@ -350,6 +350,67 @@ fn a_curriculum_stage_sets_task_keys_and_resumes_exactly() {
     });
 }
 
+/// A stage that turns the critic's privileged values on: the critic is
+/// widened when the stage starts (the checkpoint says so from then on), a
+/// resume at the boundary and a fork from a run without them end as the
+/// uninterrupted run, and the policy acts on the plain observation.
+#[test]
+fn a_stage_gives_the_critic_privileged_values_and_resumes_and_forks_exactly() {
+    let runs = TwoStages::new(
+        "stage-privileged",
+        "\n[curriculum.task.observation]\nprivileged_critic = true\n",
+    );
+    let log = runs.train(&runs.a);
+    assert!(
+        log.contains("curriculum stage 2: rigid, task: observation = { privileged_critic = true }"),
+        "{log}"
+    );
+    let state = |iteration: &str| {
+        std::fs::read_to_string(
+            runs.a
+                .join("checkpoints")
+                .join(iteration)
+                .join("state.toml"),
+        )
+        .unwrap()
+    };
+    assert!(!state("iter-000002").contains("privileged_size"));
+    let widened = state("iter-000004");
+    assert!(
+        widened.contains("privileged_size = 12")
+            && widened.contains("normalizer_appended_from = 102")
+            && widened.contains("normalizer_appended_count = 16.0"),
+        "{widened}"
+    );
+    runs.resume_after_stage_1(|checkpoint| {
+        let saved = std::fs::read_to_string(checkpoint.join("config.toml")).unwrap();
+        assert!(
+            saved.contains("[curriculum.task.observation]\nprivileged_critic = true\n"),
+            "{saved}"
+        );
+    });
+    // a fork from the end of stage 1 of a run that never had them
+    let plain = TwoStages::new("stage-privileged-source", "");
+    plain.train(&plain.a);
+    let forked = runs.b.with_file_name("forked");
+    ok(&runs.args(
+        &forked,
+        &["--fork", s(&plain.a.join("checkpoints/iter-000002"))],
+    ));
+    assert_eq!(weights(&runs.a), weights(&forked), "the fork differs");
+    let r = json_of(&[
+        "rollout",
+        "--policy",
+        s(&runs.a),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(r["phases"], 2);
+}
+
 /// `--fork`: a run that goes on from another run's checkpoint, under a
 /// config that trains the checkpoint's iterations as that run did, ends as
 /// the config's run from scratch does (weights and metrics), and can be

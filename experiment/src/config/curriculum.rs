@@ -164,19 +164,76 @@ impl Experiment {
     }
 }
 
+/// The one `[curriculum.task.observation]` key a stage may set: the
+/// critic's privileged values, which the learner adds to the critic's input
+/// when the stage starts (the policy's input stays the run's).
+const STAGE_OBSERVATION_KEY: &str = "privileged_critic";
+
 /// A stage's task: `[task]`'s keys with the stage's `[curriculum.task]`
-/// keys on top; keys that change the observation are refused.
+/// keys on top; keys that change the policy's input are refused.
 fn stage_task(task_table: &toml::Table, overrides: &toml::Table) -> Result<TaskConfig, String> {
-    if let Some(key) = FIXED_TASK_KEYS.iter().find(|k| overrides.contains_key(**k)) {
-        return Err(format!(
+    let fixed = |key: &str| {
+        format!(
             "{key} cannot change between stages (it sets the networks' input); set it in [task]"
-        ));
+        )
+    };
+    if let Some(key) = FIXED_TASK_KEYS
+        .iter()
+        .find(|k| **k != "observation" && overrides.contains_key(**k))
+    {
+        return Err(fixed(key));
     }
     let mut merged = task_table.clone();
     for (key, value) in overrides {
-        merged.insert(key.clone(), value.clone());
+        if key != "observation" {
+            merged.insert(key.clone(), value.clone());
+            continue;
+        }
+        let toml::Value::Table(observation) = value else {
+            return Err("observation must be a table ([curriculum.task.observation])".into());
+        };
+        if let Some(other) = observation.keys().find(|k| *k != STAGE_OBSERVATION_KEY) {
+            return Err(format!(
+                "{}; of [curriculum.task.observation] only {STAGE_OBSERVATION_KEY} (the critic's input) may be set",
+                fixed(&format!("observation.{other}"))
+            ));
+        }
+        let mut base = match task_table.get("observation") {
+            Some(toml::Value::Table(t)) => t.clone(),
+            _ => toml::Table::new(),
+        };
+        base.extend(observation.clone());
+        merged.insert("observation".into(), toml::Value::Table(base));
     }
     resolve_task(&merged)
+}
+
+impl Experiment {
+    /// A critic cannot lose inputs: once a stage turns `privileged_critic`
+    /// on, every later stage keeps it on.
+    pub(super) fn check_stage_critics(&self, source: &str) -> Result<()> {
+        let privileged = |stage: &Stage| {
+            stage
+                .task
+                .as_ref()
+                .unwrap_or(&self.task)
+                .observation
+                .privileged_critic
+        };
+        let mut first_on = None;
+        for (k, stage) in self.curriculum.iter().enumerate() {
+            match (first_on, privileged(stage)) {
+                (None, true) => first_on = Some(k),
+                (Some(on), false) => bail!(
+                    "{source} [[curriculum]] stage {}: the critic sees its privileged values from stage {} on and cannot lose them; set [curriculum.task.observation] privileged_critic = true in this stage too",
+                    k + 1,
+                    on + 1
+                ),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Reads `[[curriculum]]` (the stages' tasks over `task_table`, the

@@ -253,6 +253,7 @@ impl Experiment {
             residual,
         };
         experiment.check_stage_rates(&format!("config {source}"))?;
+        experiment.check_stage_critics(&format!("config {source}"))?;
         Ok(experiment)
     }
 
@@ -337,8 +338,17 @@ impl Experiment {
                 text.push_str(&format!("window = {}\n", rule.window));
             }
             if !stage.task_overrides.is_empty() {
+                let (tables, keys): (toml::Table, toml::Table) = stage
+                    .task_overrides
+                    .clone()
+                    .into_iter()
+                    .partition(|(_, v)| v.is_table());
                 text.push_str("\n[curriculum.task]\n");
-                text.push_str(&toml::to_string(&stage.task_overrides).expect("a table serialises"));
+                text.push_str(&toml::to_string(&keys).expect("a table serialises"));
+                for (name, table) in tables {
+                    text.push_str(&format!("\n[curriculum.task.{name}]\n"));
+                    text.push_str(&toml::to_string(&table).expect("a table serialises"));
+                }
             }
         }
         if let Some(residual) = &self.residual {
@@ -702,6 +712,48 @@ mod tests {
         );
     }
 
+    /// A stage may turn the critic's privileged values on (the policy's
+    /// input stays the run's); later stages must keep them; the resolved
+    /// file writes the stage's observation table where it belongs.
+    #[test]
+    fn a_stage_turns_the_privileged_critic_on_for_good() {
+        let stages = |third: &str| {
+            format!(
+                "[task.observation]\nshort_history = true\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"soil:4cm\"\niterations = 2\n\n[curriculum.task]\nbase_height_reference = \"feet\"\n\n[curriculum.task.observation]\nprivileged_critic = true\n\n[[curriculum]]\nterrain = \"soil:4cm\"\niterations = 2\n{third}"
+            )
+        };
+        let text = stages("\n[curriculum.task.observation]\nprivileged_critic = true\n");
+        let e = Experiment::from_toml_builtin(&text, "c.toml").unwrap();
+        assert!(!e.task_at(2).observation.privileged_critic);
+        assert_eq!(e.task_at(2).observation.privileged_size(), 0);
+        for late in [3, 5] {
+            let task = e.task_at(late);
+            assert!(task.observation.privileged_critic, "iteration {late}");
+            assert_eq!(task.observation_size(), e.task.observation_size());
+        }
+        assert_eq!(
+            e.task_at(3).base_height_reference,
+            robot::task::BaseHeightReference::Feet
+        );
+        let resolved = e.to_toml();
+        assert!(
+            resolved.contains("[curriculum.task.observation]\nprivileged_critic = true\n"),
+            "{resolved}"
+        );
+        assert_eq!(
+            Experiment::from_toml_builtin(&resolved, "resolved").unwrap(),
+            e
+        );
+        // a later stage without it
+        let err = Experiment::from_toml_builtin(&stages(""), "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("stage 3: the critic sees its privileged values from stage 2 on"),
+            "{err}"
+        );
+    }
+
     #[test]
     fn a_stage_sets_task_keys_over_the_task_section() {
         let text = "[task]\nmax_phases = 12\ntermination_reward = -10.0\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n\n[curriculum.task]\ntermination_reward = -30.0\nmax_paid_progress_m = 0.04\n";
@@ -742,7 +794,7 @@ mod tests {
         for (stage_keys, expected) in [
             (
                 "[curriculum.task.observation]\nfoot_history = false\n",
-                "stage 2 [curriculum.task]: observation cannot change between stages",
+                "stage 2 [curriculum.task]: observation.foot_history cannot change between stages (it sets the networks' input); set it in [task]; of [curriculum.task.observation] only privileged_critic (the critic's input) may be set",
             ),
             (
                 "[curriculum.task]\naction_prior = \"scripted_crawl\"\n",

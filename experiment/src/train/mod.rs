@@ -20,8 +20,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use learn::IterationStats;
 use learn::checkpoint::{remove_partial_saves, write_file_atomically};
+use learn::{Algorithm, IterationStats, VecEnv};
 use robot::RobotModel;
 use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
@@ -183,8 +183,20 @@ pub fn train(
             stop.clone(),
         )
     };
+    // a stage that turns `privileged_critic` on widens the critic's input
+    // to its environment's privileged values before its first iteration
+    let widen_critic = |trainer: &mut dyn Algorithm, env: &TaskEnv, iteration: u64| {
+        let privileged = env.observation_size() - env.policy_observation_size();
+        trainer.widen_critic(privileged).with_context(|| {
+            format!(
+                "iteration {}: the critic cannot take the stage's privileged values",
+                iteration + 1
+            )
+        })
+    };
     let mut stage = experiment.terrain_at(start_iteration).0;
     let mut env = build_env(&experiment, start_iteration)?;
+    widen_critic(&mut *trainer, &env, start_iteration)?;
     for (e, logger) in loggers {
         env.attach_logger(e, logger);
     }
@@ -212,6 +224,7 @@ pub fn train(
         if next_stage != stage {
             let loggers = env.detach_loggers();
             env = build_env(&experiment, iteration)?;
+            widen_critic(&mut *trainer, &env, iteration)?;
             for l in loggers {
                 env.attach_logger(l.env, l.logger);
             }

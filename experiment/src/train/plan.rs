@@ -82,7 +82,7 @@ impl RunPlan {
         };
         let privileged = match experiment.residual {
             Some(_) => 0,
-            None => experiment.task.observation.privileged_size(),
+            None => experiment.task_at(0).observation.privileged_size(),
         };
         let learner = experiment.learner().build((obs, privileged), actions, seed);
         let learner = if privileged > 0 {

@@ -64,6 +64,26 @@ impl ActorCritic {
         })
     }
 
+    /// The same networks with the critic also taking `extra` privileged
+    /// values after its present input: the first layer's weights for them
+    /// are zero, so every value the critic gives is unchanged until
+    /// training moves them. The actor is untouched.
+    pub fn with_privileged(&self, extra: usize) -> Result<Self, LearnError> {
+        let mut critic = self.critic.clone();
+        let first = &critic.layers[0];
+        let weight = first.weight.as_tensor();
+        let zeros = Tensor::zeros((extra, weight.dim(1)?), weight.dtype(), &self.device)?;
+        critic.layers[0] = crate::mlp::Dense {
+            weight: Var::from_tensor(&Tensor::cat(&[weight, &zeros], 0)?)?,
+            bias: Var::from_tensor(&first.bias.as_tensor().copy()?)?,
+        };
+        Ok(Self {
+            critic,
+            privileged_size: self.privileged_size + extra,
+            ..self.clone()
+        })
+    }
+
     /// `O`: the values the actor sees.
     pub fn obs_size(&self) -> usize {
         self.obs_size
@@ -247,6 +267,30 @@ mod tests {
         for (x, y) in lp.iter().zip(&lp2) {
             assert!((x - y).abs() < 1e-4, "{x} vs {y}");
         }
+    }
+
+    /// A critic given privileged values gives the same values as before
+    /// whatever they are; the actor is the same.
+    #[test]
+    fn a_critic_given_privileged_values_values_as_before() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let ac = ActorCritic::new((4, 0), 2, &[8, 8], -0.5, &mut rng).unwrap();
+        let wide = ac.with_privileged(3).unwrap();
+        assert_eq!((wide.obs_size(), wide.privileged_size()), (4, 3));
+        let obs = [0.1f32, -0.2, 0.3, 0.4, 1.0, 0.0, -1.0, 0.5];
+        let with_privileged = [
+            0.1f32, -0.2, 0.3, 0.4, 5.0, -7.0, 2.0, 1.0, 0.0, -1.0, 0.5, 0.3, 0.2, 9.0,
+        ];
+        assert_eq!(
+            ac.values(&obs).unwrap(),
+            wide.values(&with_privileged).unwrap()
+        );
+        assert_eq!(
+            ac.mean_actions(&obs).unwrap(),
+            wide.mean_actions(&obs).unwrap()
+        );
+        let shape = wide.critic.layers[0].weight.as_tensor().dims().to_vec();
+        assert_eq!(shape, [7, 8]);
     }
 
     #[test]

@@ -17,6 +17,7 @@ use crate::checkpoint::{
     normalizer_tensors, read_checksummed, read_state, resolve_checkpoint, rng_fields,
     rng_from_fields, state_text, tensors_file, var_tensors,
 };
+use crate::normalizer::Appended;
 use crate::optim::Adam;
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -33,6 +34,12 @@ struct StateFile {
     action_size: usize,
     adam_step: u64,
     normalizer_count: f64,
+    /// where the values appended to the critic's input mid-run begin in the
+    /// normaliser, and its count of them (absent: none appended)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    normalizer_appended_from: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    normalizer_appended_count: Option<f64>,
     rng_seed_hex: String,
     rng_stream: u64,
     rng_word_pos: String,
@@ -65,6 +72,8 @@ impl Trainer {
             action_size: self.policy.action_size(),
             adam_step: self.adam.step,
             normalizer_count: self.normalizer.count,
+            normalizer_appended_from: self.normalizer.appended.map(|a| a.from),
+            normalizer_appended_count: self.normalizer.appended.map(|a| a.count),
             rng_seed_hex,
             rng_stream,
             rng_word_pos,
@@ -122,6 +131,22 @@ impl Trainer {
             state.normalizer_count,
             state.ppo.obs_clip,
         )?;
+        let normalizer = match (
+            state.normalizer_appended_from,
+            state.normalizer_appended_count,
+        ) {
+            (None, None) => normalizer,
+            (Some(from), Some(count)) => normalizer
+                .with_appended(Appended { from, count })
+                .map_err(|e| bad_file(&dir, STATE_FILE, e.to_string()))?,
+            _ => {
+                return Err(bad_file(
+                    &dir,
+                    STATE_FILE,
+                    "normalizer_appended_from and normalizer_appended_count come together".into(),
+                ));
+            }
+        };
         let learning_rate = match (state.ppo.desired_kl, state.learning_rate_now) {
             (Some(_), Some(lr)) if lr.is_finite() && lr > 0.0 => lr,
             (Some(_), Some(lr)) => {

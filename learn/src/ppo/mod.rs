@@ -112,6 +112,10 @@ impl Algorithm for Trainer {
         Trainer::set_learning_rate(self, learning_rate)
     }
 
+    fn widen_critic(&mut self, privileged_size: usize) -> Result<(), LearnError> {
+        Trainer::widen_critic(self, privileged_size)
+    }
+
     fn act_deterministic(&self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError> {
         Trainer::act_deterministic(self, raw_obs)
     }

@@ -175,6 +175,55 @@ impl Trainer {
         }
     }
 
+    /// Gives the critic `privileged_size` privileged values after the
+    /// observation, from the next iteration on (a curriculum stage that
+    /// turns `privileged_critic` on): the new inputs' first-layer weights
+    /// and their Adam moments start at zero, so the critic's values are
+    /// unchanged until training moves them, and the normaliser counts the
+    /// new values from 0 ([`ObsNormalizer::append`]). Nothing changes when
+    /// the critic has them already; a critic cannot lose inputs.
+    pub fn widen_critic(&mut self, privileged_size: usize) -> Result<(), LearnError> {
+        let have = self.policy.privileged_size();
+        if privileged_size == have {
+            return Ok(());
+        }
+        if privileged_size < have {
+            return Err(LearnError::Mismatch(format!(
+                "the critic sees {have} privileged values; it cannot be cut to {privileged_size}"
+            )));
+        }
+        let extra = privileged_size - have;
+        let policy = self.policy.with_privileged(extra)?;
+        let mut adam = Adam::new(policy.named_vars(), self.adam.learning_rate)?;
+        for (k, (name, var)) in adam.vars().to_vec().iter().enumerate() {
+            let (m, v) = (&self.adam.m[k], &self.adam.v[k]);
+            let rows = var.as_tensor().dims().first().copied().unwrap_or(0);
+            let grown = rows != m.dims().first().copied().unwrap_or(0);
+            if grown && name != "critic.0.weight" {
+                return Err(LearnError::Mismatch(format!(
+                    "{name} changed shape when the critic was widened"
+                )));
+            }
+            let widen = |moment: &Tensor| -> Result<Tensor, LearnError> {
+                if !grown {
+                    return Ok(moment.clone());
+                }
+                let zeros =
+                    Tensor::zeros((extra, moment.dim(1)?), moment.dtype(), moment.device())?;
+                Ok(Tensor::cat(&[moment, &zeros], 0)?)
+            };
+            adam.m[k] = widen(m)?;
+            adam.v[k] = widen(v)?;
+        }
+        adam.step = self.adam.step;
+        adam.betas = self.adam.betas;
+        adam.eps = self.adam.eps;
+        self.normalizer.append(extra);
+        self.policy = policy;
+        self.adam = adam;
+        Ok(())
+    }
+
     /// Sets the learning rate from the next update on (the configured one
     /// too, so checkpoints carry it): a curriculum stage's own rate.
     pub fn set_learning_rate(&mut self, learning_rate: f64) -> Result<(), LearnError> {

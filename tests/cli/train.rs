@@ -150,6 +150,22 @@ fn first_layer_shape(run: &Path) -> Value {
     header["actor.0.weight"]["shape"].clone()
 }
 
+/// `rollout --policy POLICY --terrain rigid --phases 2`, which must run
+/// both phases.
+fn rolls_out_two_phases_on_rigid_ground(policy: &Path) {
+    let r = json_of(&[
+        "rollout",
+        "--policy",
+        s(policy),
+        "--terrain",
+        "rigid",
+        "--phases",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(r["phases"], 2);
+}
+
 fn weights(run: &Path) -> Vec<u8> {
     std::fs::read(run.join("latest/weights.safetensors")).unwrap()
 }
@@ -398,17 +414,7 @@ fn a_stage_gives_the_critic_privileged_values_and_resumes_and_forks_exactly() {
         &["--fork", s(&plain.a.join("checkpoints/iter-000002"))],
     ));
     assert_eq!(weights(&runs.a), weights(&forked), "the fork differs");
-    let r = json_of(&[
-        "rollout",
-        "--policy",
-        s(&runs.a),
-        "--terrain",
-        "rigid",
-        "--phases",
-        "2",
-        "--json",
-    ]);
-    assert_eq!(r["phases"], 2);
+    rolls_out_two_phases_on_rigid_ground(&runs.a);
 }
 
 /// `--fork`: a run that goes on from another run's checkpoint, under a
@@ -610,17 +616,7 @@ fn a_policy_exported_with_its_checkpoint_forks_like_the_run() {
         "the fork's metrics begin with the policy's"
     );
     // the policy itself still acts
-    let rollout = json_of(&[
-        "rollout",
-        "--policy",
-        s(&policy),
-        "--terrain",
-        "rigid",
-        "--phases",
-        "2",
-        "--json",
-    ]);
-    assert_eq!(rollout["phases"], 2);
+    rolls_out_two_phases_on_rigid_ground(&policy);
 }
 
 /// `[task.observation] privileged_critic`: the critic sees 12 more values,
@@ -644,17 +640,7 @@ fn a_privileged_critic_trains_resumes_and_its_policy_acts_on_the_plain_observati
         state.contains("obs_size = 102") && state.contains("privileged_size = 12"),
         "{state}"
     );
-    let r = json_of(&[
-        "rollout",
-        "--policy",
-        s(&a),
-        "--terrain",
-        "rigid",
-        "--phases",
-        "2",
-        "--json",
-    ]);
-    assert_eq!(r["phases"], 2);
+    rolls_out_two_phases_on_rigid_ground(&a);
     let sac = dir.join("sac.toml");
     let text = std::fs::read_to_string(&config).unwrap();
     std::fs::write(&sac, format!("{text}{TINY_SAC}")).unwrap();

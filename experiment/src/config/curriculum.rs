@@ -210,7 +210,8 @@ fn stage_task(task_table: &toml::Table, overrides: &toml::Table) -> Result<TaskC
 
 impl Experiment {
     /// A critic cannot lose inputs: once a stage turns `privileged_critic`
-    /// on, every later stage keeps it on.
+    /// on, every later stage keeps it on. A residual's critic sees the
+    /// residual's own observation, so `[residual]` refuses it.
     pub(super) fn check_stage_critics(&self, source: &str) -> Result<()> {
         let privileged = |stage: &Stage| {
             stage
@@ -220,6 +221,13 @@ impl Experiment {
                 .observation
                 .privileged_critic
         };
+        if self.residual.is_some()
+            && (self.task.observation.privileged_critic || self.curriculum.iter().any(privileged))
+        {
+            bail!(
+                "{source}: privileged_critic gives the phase-level policy's critic privileged values; a [residual] policy's critic sees the residual's own observation, so it cannot be set with [residual]"
+            );
+        }
         let mut first_on = None;
         for (k, stage) in self.curriculum.iter().enumerate() {
             match (first_on, privileged(stage)) {

@@ -752,6 +752,15 @@ mod tests {
             err.contains("stage 3: the critic sees its privileged values from stage 2 on"),
             "{err}"
         );
+        // a residual's critic sees the residual's observation
+        let residual = format!("{text}\n[residual]\nphase_policy = \"none\"\n");
+        let err = Experiment::from_toml_builtin(&residual, "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("c.toml: privileged_critic") && err.contains("[residual]"),
+            "{err}"
+        );
     }
 
     #[test]

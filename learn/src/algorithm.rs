@@ -50,10 +50,7 @@ pub trait Algorithm: Send {
         if privileged_size == 0 {
             Ok(())
         } else {
-            Err(LearnError::Config(format!(
-                "{}'s critics see what its actor sees: {privileged_size} privileged observation values (an asymmetric critic) are PPO's only",
-                self.name()
-            )))
+            Err(no_asymmetric_critic(self.name(), privileged_size))
         }
     }
 
@@ -77,6 +74,14 @@ pub trait Algorithm: Send {
     /// The deterministic actor as [`crate::onnx`] writes it: normaliser,
     /// network and action bound, computing what `act_deterministic` does.
     fn actor_graph(&self) -> Result<crate::onnx::ActorGraph, LearnError>;
+}
+
+/// The refusal of a learner whose critics see only what its actor sees,
+/// asked for `privileged_size` privileged values.
+pub(crate) fn no_asymmetric_critic(algorithm: &str, privileged_size: usize) -> LearnError {
+    LearnError::Config(format!(
+        "{algorithm}'s critics see what its actor sees: {privileged_size} privileged observation values (an asymmetric critic) are PPO's only"
+    ))
 }
 
 /// Checks the network sizes a new learner is asked for.

@@ -7,6 +7,13 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::LearnError;
 
+/// `t` (`rows x cols`) with `extra` rows of zeros below: a layer's weight,
+/// or its optimiser moments, given `extra` more inputs that it ignores.
+pub fn with_zero_rows(t: &Tensor, extra: usize) -> candle_core::Result<Tensor> {
+    let zeros = Tensor::zeros((extra, t.dim(1)?), t.dtype(), t.device())?;
+    Tensor::cat(&[t, &zeros], 0)
+}
+
 /// A dense layer, `y = x W + b`, `W` stored `in x out`.
 #[derive(Debug, Clone)]
 pub struct Dense {

@@ -11,7 +11,7 @@ use candle_core::{D, Device, Tensor, Var};
 use rand_chacha::ChaCha8Rng;
 
 use crate::LearnError;
-use crate::mlp::{Mlp, standard_normal};
+use crate::mlp::{Mlp, standard_normal, with_zero_rows};
 
 /// ln(2 pi)
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
@@ -71,10 +71,8 @@ impl ActorCritic {
     pub fn with_privileged(&self, extra: usize) -> Result<Self, LearnError> {
         let mut critic = self.critic.clone();
         let first = &critic.layers[0];
-        let weight = first.weight.as_tensor();
-        let zeros = Tensor::zeros((extra, weight.dim(1)?), weight.dtype(), &self.device)?;
         critic.layers[0] = crate::mlp::Dense {
-            weight: Var::from_tensor(&Tensor::cat(&[weight, &zeros], 0)?)?,
+            weight: Var::from_tensor(&with_zero_rows(first.weight.as_tensor(), extra)?)?,
             bias: Var::from_tensor(&first.bias.as_tensor().copy()?)?,
         };
         Ok(Self {

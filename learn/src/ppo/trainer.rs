@@ -29,6 +29,7 @@ use crate::LearnError;
 use crate::algorithm::{Figure, IterationStats, check_sizes};
 use crate::env::{StepResult, VecEnv};
 use crate::episodes::{EpisodeCollector, EpisodeStats};
+use crate::mlp::with_zero_rows;
 use crate::normalizer::ObsNormalizer;
 use crate::optim::{Adam, check_learning_rate, clip_grad_norm, gradients};
 use crate::seeds::{RngState, derive_seed};
@@ -204,16 +205,13 @@ impl Trainer {
                     "{name} changed shape when the critic was widened"
                 )));
             }
-            let widen = |moment: &Tensor| -> Result<Tensor, LearnError> {
-                if !grown {
-                    return Ok(moment.clone());
-                }
-                let zeros =
-                    Tensor::zeros((extra, moment.dim(1)?), moment.dtype(), moment.device())?;
-                Ok(Tensor::cat(&[moment, &zeros], 0)?)
-            };
-            adam.m[k] = widen(m)?;
-            adam.v[k] = widen(v)?;
+            if grown {
+                adam.m[k] = with_zero_rows(m, extra)?;
+                adam.v[k] = with_zero_rows(v, extra)?;
+            } else {
+                adam.m[k] = m.clone();
+                adam.v[k] = v.clone();
+            }
         }
         adam.step = self.adam.step;
         adam.betas = self.adam.betas;

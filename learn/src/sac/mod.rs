@@ -37,7 +37,7 @@ pub use agent::SacAgent;
 pub use config::{SacConfig, SacVariant};
 
 use crate::LearnError;
-use crate::algorithm::{Algorithm, IterationStats};
+use crate::algorithm::{Algorithm, IterationStats, no_asymmetric_critic};
 use crate::env::VecEnv;
 use crate::export::{PolicyFile, load_acting_weights, policy_files};
 use crate::onnx::{self, ActionBound, ActorGraph};
@@ -108,10 +108,7 @@ impl Settings for SacConfig {
         seed: u64,
     ) -> Result<Box<dyn Algorithm>, LearnError> {
         if privileged_size > 0 {
-            return Err(LearnError::Config(format!(
-                "{}'s critics see what its actor sees: {privileged_size} privileged observation values (an asymmetric critic) are PPO's only",
-                self.algorithm()
-            )));
+            return Err(no_asymmetric_critic(self.algorithm(), privileged_size));
         }
         Ok(Box::new(SacAgent::new(
             self.clone(),

@@ -19,7 +19,8 @@ pub struct CurvesArgs {
     /// The PNG to write
     #[arg(long)]
     out: PathBuf,
-    /// The metrics key to draw (any number in `metrics.jsonl`)
+    /// The metrics key to draw (any number in `metrics.jsonl`; a dotted key
+    /// such as `falls_by_cause.pitch_too_large` reads inside an object)
     #[arg(long, default_value = "mean_distance_m")]
     metric: String,
     /// Iterations in the trailing moving average (1: none)
@@ -77,9 +78,11 @@ pub fn read_metrics(name: &str, path: &Path, metric: &str) -> Result<RunCurve> {
     {
         let record: serde_json::Value = serde_json::from_str(line)
             .with_context(|| format!("{}:{}: not JSON", path.display(), k + 1))?;
+        // a dotted key names a value inside an object: `reward_terms.distance`
         let number = |key: &str| {
-            record[key]
-                .as_f64()
+            record
+                .pointer(&format!("/{}", key.replace('.', "/")))
+                .and_then(serde_json::Value::as_f64)
                 .with_context(|| format!("{}:{}: no number {key:?}", path.display(), k + 1))
         };
         let n = number("phases")?;
@@ -192,6 +195,23 @@ mod tests {
         .unwrap();
         let run = read_run("a", tmp.path(), "mean_distance_m").unwrap();
         assert_eq!(run.points, [(640.0, 10.0, 0.5), (1280.0, 15.0, 1.0)]);
+        std::fs::write(
+            tmp.path().join("metrics.jsonl"),
+            "{\"phases\":640,\"phases_per_s\":64.0,\"falls_by_cause\":{\"pitch_too_large\":0.25}}\n",
+        )
+        .unwrap();
+        let run = read_run("a", tmp.path(), "falls_by_cause.pitch_too_large").unwrap();
+        assert_eq!(run.points, [(640.0, 10.0, 0.25)]);
+        let err = format!(
+            "{:#}",
+            read_run("a", tmp.path(), "falls_by_cause.base_too_low").unwrap_err()
+        );
+        assert!(err.contains("\"falls_by_cause.base_too_low\""), "{err}");
+        std::fs::write(
+            tmp.path().join("metrics.jsonl"),
+            "{\"phases\":640,\"phases_per_s\":64.0,\"mean_distance_m\":0.5}\n{\"phases\":640,\"phases_per_s\":128.0,\"mean_distance_m\":1.0}\n",
+        )
+        .unwrap();
         let err = format!("{:#}", read_run("a", tmp.path(), "kl").unwrap_err());
         assert!(err.contains("line 1") || err.contains(":1:"), "{err}");
         assert!(err.contains("\"kl\""), "{err}");

@@ -12,7 +12,7 @@ use learn::{StepResult, VecEnv};
 use rayon::prelude::*;
 use robot::action::ACTION_SIZE;
 use robot::snapshot::{PhaseObserver, PhaseStart};
-use robot::task::{PhaseOutcome, RewardTerms, Task, TaskConfig};
+use robot::task::{PhaseOutcome, RewardTerms, Task, TaskConfig, Termination};
 use robot::{RobotModel, WorldConfig};
 use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
@@ -21,8 +21,16 @@ use crate::config::Experiment;
 use crate::residual::{self, ResidualDriver};
 use crate::scene::make_world;
 
-/// Per-episode metrics, in the order of `episode_metrics`.
-pub const EPISODE_METRICS: [&str; 2] = ["distance_m", "goals_reached"];
+/// Per-episode metrics, in the order of `episode_metrics`: the distance
+/// and the goals, then per [`Termination::KINDS`] 1 when the episode ended
+/// so (`fell_<kind>`), else 0.
+pub const EPISODE_METRICS: [&str; 5] = [
+    "distance_m",
+    "goals_reached",
+    "fell_base_too_low",
+    "fell_pitch_too_large",
+    "fell_non_foot_contact",
+];
 
 /// A logger on one environment, timing what it costs.
 pub struct EnvLogger {
@@ -383,7 +391,7 @@ impl VecEnv for TaskEnv {
                         *trunc = outcome.truncated && !*term;
                         if *term || *trunc {
                             final_row.copy_from_slice(obs_row);
-                            write_episode_metrics(task, metrics);
+                            write_episode_metrics(task, outcome.termination.as_ref(), metrics);
                             task.reset(&mut obs_row[..o]);
                             task.observe_privileged(&mut obs_row[o..]);
                             if let Some(l) = logger {
@@ -397,11 +405,14 @@ impl VecEnv for TaskEnv {
 }
 
 /// An ended episode's [`EPISODE_METRICS`]: the distance along x from its
-/// start, m, and the goals reached.
-fn write_episode_metrics(task: &Task, metrics: &mut [f32]) {
+/// start, m, the goals reached, and which termination (if any) ended it.
+fn write_episode_metrics(task: &Task, termination: Option<&Termination>, metrics: &mut [f32]) {
     let base_x_m = task.world().base_pose().translation.vector.x;
     metrics[0] = (base_x_m - task.start_xy_m()[0]) as f32;
     metrics[1] = task.goals_reached() as f32;
+    for (slot, kind) in metrics[2..].iter_mut().zip(Termination::KINDS) {
+        *slot = f32::from(u8::from(termination.is_some_and(|t| t.kind() == kind)));
+    }
 }
 
 /// The reward terms of a residual run's control steps.
@@ -504,10 +515,77 @@ fn step_residual(
                     driver.observe(task, row);
                     if ended || cut {
                         final_row.copy_from_slice(row);
-                        write_episode_metrics(task, metrics);
+                        let termination =
+                            outcome.phase.as_ref().and_then(|p| p.termination.as_ref());
+                        write_episode_metrics(task, termination, metrics);
                         begin_residual_episode(task, driver, phase_row, row, logger);
                     }
                 },
             );
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+
+    use learn::{StepResult, VecEnv};
+    use robot::RobotModel;
+    use terrain_plugins::Registry;
+
+    use super::*;
+
+    /// The episode metrics of the first episode of each of two worlds on
+    /// rigid ground, one-phase episodes, standing actions (zeros), with the
+    /// `[task]` lines given.
+    fn first_episode_metrics(task_lines: &str) -> Vec<(String, f32)> {
+        let registry = Arc::new(Registry::builtin());
+        let text = format!(
+            "[terrain]\nspec = \"rigid\"\n[task]\nmax_phases = 1\n{task_lines}[train]\nenvs = 2\n"
+        );
+        let experiment = Experiment::from_toml(&text, "test.toml", &registry).unwrap();
+        let mut env = TaskEnv::new(
+            &registry,
+            &experiment.terrain,
+            &experiment.task,
+            &Arc::new(RobotModel::laikago()),
+            &experiment,
+            1,
+            Arc::new(AtomicBool::new(false)),
+        )
+        .unwrap();
+        let mut obs = vec![0.0; 2 * env.observation_size()];
+        env.reset_all(3, &mut obs);
+        let mut out = StepResult::new(&env);
+        env.step(&vec![0.0; 2 * env.action_size()], &mut out);
+        assert!((0..2).all(|i| out.ended(i)), "one-phase episodes end");
+        let m = EPISODE_METRICS.len();
+        assert_eq!(env.episode_metric_names(), EPISODE_METRICS);
+        EPISODE_METRICS
+            .iter()
+            .zip(&out.episode_metrics[..m])
+            .map(|(name, v)| (name.to_string(), *v))
+            .collect()
+    }
+
+    #[test]
+    fn an_ended_episode_reports_the_termination_that_ended_it() {
+        let fell = |metrics: &[(String, f32)]| -> Vec<f32> {
+            metrics[2..].iter().map(|(_, v)| *v).collect()
+        };
+        // a phase of standing stays within the paper's limits: cut by the
+        // time limit, no cause
+        let survived = first_episode_metrics("");
+        assert_eq!(fell(&survived), [0.0, 0.0, 0.0], "{survived:?}");
+        // a pitch limit of 0.01 degrees ends it by pitch
+        let pitched = first_episode_metrics("max_pitch_deg = 0.01\n");
+        assert_eq!(fell(&pitched), [0.0, 1.0, 0.0], "{pitched:?}");
+        // a minimum base height above the standing base ends it by height
+        let low = first_episode_metrics("min_base_height_m = 0.6\n");
+        assert_eq!(fell(&low), [1.0, 0.0, 0.0], "{low:?}");
+        for kind in Termination::KINDS {
+            assert!(EPISODE_METRICS.contains(&format!("fell_{kind}").as_str()));
+        }
+    }
 }

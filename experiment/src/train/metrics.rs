@@ -31,6 +31,21 @@ pub fn curves(stats: &IterationStats) -> Vec<(String, f64)> {
         .collect()
 }
 
+/// The share of the iteration's ended episodes that each termination ended
+/// (`robot::task::Termination::KINDS`), null where no episode ended.
+fn falls_by_cause(stats: &IterationStats) -> serde_json::Value {
+    robot::task::Termination::KINDS
+        .iter()
+        .map(|kind| {
+            (
+                kind.to_string(),
+                json!(stats.episode_metric(&format!("fell_{kind}"))),
+            )
+        })
+        .collect::<serde_json::Map<_, _>>()
+        .into()
+}
+
 /// The JSON line of one iteration.
 pub fn record(
     stats: &IterationStats,
@@ -53,6 +68,7 @@ pub fn record(
         "mean_episode_length": episodes.mean_length,
         "mean_distance_m": stats.episode_metric("distance_m"),
         "mean_goals_reached": stats.episode_metric("goals_reached"),
+        "falls_by_cause": falls_by_cause(stats),
         "mean_phase_reward": episodes.mean_step_reward,
         "reward_terms": terms,
         "phases_per_s": stats.steps_per_sec,

@@ -36,6 +36,9 @@ impl std::fmt::Display for Termination {
 }
 
 impl Termination {
+    /// Every [`Termination::kind`], in the order of the variants.
+    pub const KINDS: [&'static str; 3] = ["base_too_low", "pitch_too_large", "non_foot_contact"];
+
     /// A short machine-readable name.
     pub fn kind(&self) -> &'static str {
         match self {
@@ -69,5 +72,22 @@ impl Task {
             return Some(Termination::NonFootContact { links });
         }
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_kind_is_listed_once_in_the_order_of_the_variants() {
+        let all = [
+            Termination::BaseTooLow { height_m: 0.1 },
+            Termination::PitchTooLarge { pitch_deg: 20.0 },
+            Termination::NonFootContact {
+                links: vec!["chassis".into()],
+            },
+        ];
+        assert_eq!(all.map(|t| t.kind()), Termination::KINDS);
     }
 }

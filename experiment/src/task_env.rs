@@ -536,9 +536,9 @@ mod tests {
 
     use super::*;
 
-    /// The episode metrics of the first episode of each of two worlds on
-    /// rigid ground, one-phase episodes, standing actions (zeros), with the
-    /// `[task]` lines given.
+    /// The episode metrics of world 0's first episode, of two worlds on
+    /// rigid ground, one-phase episodes and zero actions, with the `[task]`
+    /// lines given.
     fn first_episode_metrics(task_lines: &str) -> Vec<(String, f32)> {
         let registry = Arc::new(Registry::builtin());
         let text = format!(

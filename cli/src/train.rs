@@ -12,6 +12,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use experiment::Experiment;
 use experiment::config::advance::Advance;
+use experiment::config::levels::TerrainLevels;
 use experiment::train::run_dir::default_run_dir;
 use experiment::train::{IterationReport, RunPlan, RunStart, TrainObserver, TrainOutcome};
 use learn::registry::Registration;
@@ -101,7 +102,7 @@ impl TrainObserver for Terminal {
         eprintln!(
             "training ({}) on {} with {} environments x {} {} per iteration, {} threads; run directory {}",
             start.algo,
-            start.terrain,
+            terrain_label(start.terrain, start.levels),
             start.envs,
             start.steps_per_env,
             start.step_unit,
@@ -114,6 +115,7 @@ impl TrainObserver for Terminal {
         &mut self,
         stage: usize,
         terrain: &TerrainSpec,
+        levels: Option<&TerrainLevels>,
         learning_rate: Option<f64>,
         task_overrides: &toml::Table,
     ) {
@@ -127,7 +129,11 @@ impl TrainObserver for Terminal {
                 .collect();
             format!(", task: {}", keys.join(", "))
         };
-        eprintln!("curriculum stage {}: {terrain}{rate}{task}", stage + 1);
+        eprintln!(
+            "curriculum stage {}: {}{rate}{task}",
+            stage + 1,
+            terrain_label(terrain, levels)
+        );
     }
 
     fn stage_ready(&mut self, stage: usize, iterations: u64, rule: &Advance) {
@@ -148,12 +154,25 @@ impl TrainObserver for Terminal {
             report.elapsed_secs,
             report.phases_done,
             self.step_unit,
+            report.record["mean_level"].as_f64(),
         );
         Ok(())
     }
 
     fn warning(&mut self, message: &str) {
         eprintln!("warning: {message}");
+    }
+}
+
+/// A stage's terrain as the progress lines name it: the spec, or its
+/// levels, easiest first.
+fn terrain_label(terrain: &TerrainSpec, levels: Option<&TerrainLevels>) -> String {
+    match levels {
+        None => terrain.to_string(),
+        Some(levels) => {
+            let names: Vec<String> = levels.terrains.iter().map(ToString::to_string).collect();
+            format!("terrain levels {}", names.join(", "))
+        }
     }
 }
 
@@ -331,6 +350,7 @@ fn progress(
     elapsed_secs: f64,
     steps_done: usize,
     step_unit: &str,
+    mean_level: Option<f64>,
 ) {
     let width = 20;
     let iteration = stats.iteration;
@@ -350,8 +370,9 @@ fn progress(
             format!("{label} {value}")
         })
         .collect();
+    let level = mean_level.map_or(String::new(), |l| format!(" | level {l:.2}"));
     eprintln!(
-        "[{bar}] iter {iteration}/{total} | {rate:.1} {step_unit}/s | return {} | distance {} | length {} | {}",
+        "[{bar}] iter {iteration}/{total} | {rate:.1} {step_unit}/s | return {} | distance {} | length {}{level} | {}",
         fmt(stats.episodes.mean_return, ""),
         fmt(stats.episode_metric("distance_m"), " m"),
         fmt(stats.episodes.mean_length, ""),

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use learn::seeds::derive_seed;
 use learn::{StepResult, VecEnv};
 use rayon::prelude::*;
@@ -18,6 +18,7 @@ use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
 
 use crate::config::Experiment;
+use crate::config::levels::{LevelTally, TerrainLevels};
 use crate::residual::{self, ResidualDriver};
 use crate::scene::make_world;
 
@@ -111,6 +112,17 @@ pub struct TaskEnv {
     /// `[residual]`: each task stepped a control step at a time by its
     /// driver (the policy trained is the lower level)
     residual: Option<Residual>,
+    /// `[curriculum.levels]`: each world's level and what its episodes did
+    /// this iteration
+    levels: Option<WorldLevels>,
+}
+
+/// The terrain level of each world, and the tally of its episodes that
+/// ended since the levels last moved.
+struct WorldLevels {
+    config: TerrainLevels,
+    level: Vec<usize>,
+    tally: Vec<LevelTally>,
 }
 
 /// The drivers of a residual run, one per task, and each task's
@@ -122,11 +134,14 @@ struct Residual {
 
 impl TaskEnv {
     /// `experiment.train.envs` worlds on `terrain` with the experiment's
-    /// task and physics; world `i`'s terrain draw is seeded by
+    /// task and physics, or with `levels`, world `i` on the terrain of its
+    /// level `levels.1[i]`; world `i`'s terrain draw is seeded by
     /// `(experiment.train.seed, i)`. Stepped on `threads` threads.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         registry: &Arc<Registry>,
         terrain: &TerrainSpec,
+        levels: Option<(&TerrainLevels, Vec<usize>)>,
         task: &TaskConfig,
         model: &Arc<RobotModel>,
         experiment: &Experiment,
@@ -172,7 +187,24 @@ impl TaskEnv {
             pool,
             interrupted,
             pristine: true,
+            levels: None,
         };
+        if let Some((config, level)) = levels {
+            if level.len() != envs || level.iter().any(|&l| l > config.top()) {
+                bail!(
+                    "the worlds' terrain levels {level:?} are not {envs} levels in 0..={}",
+                    config.top()
+                );
+            }
+            if env.residual.is_some() {
+                bail!("terrain levels train phase-level policies; a [residual] run has none");
+            }
+            env.levels = Some(WorldLevels {
+                config: config.clone(),
+                level,
+                tally: vec![LevelTally::default(); envs],
+            });
+        }
         env.tasks = env.build_tasks(envs)?;
         Ok(env)
     }
@@ -187,13 +219,19 @@ impl TaskEnv {
             &self.physics,
             self.terrain_seed,
         );
+        let terrains: Vec<&TerrainSpec> = (0..envs)
+            .map(|i| match &self.levels {
+                Some(levels) => &levels.config.terrains[levels.level[i]],
+                None => terrain,
+            })
+            .collect();
         self.pool.install(|| {
             (0..envs)
                 .into_par_iter()
                 .map(|i| {
                     let world = make_world(
                         registry,
-                        terrain,
+                        terrains[i],
                         model.clone(),
                         derive_seed(seed, i as u64),
                         [0.0, 0.0],
@@ -230,6 +268,19 @@ impl TaskEnv {
         self.loggers_mut()
             .map(|l| std::mem::take(&mut l.secs))
             .fold(0.0, |a, b| a + b)
+    }
+
+    /// With terrain levels: moves each world's level by what its episodes
+    /// that ended since the last call did ([`TerrainLevels::next_level`]),
+    /// and returns the levels, which the worlds of the next iteration (the
+    /// next [`VecEnv::reset_all`]) are built on. `None` without levels.
+    pub fn advance_levels(&mut self) -> Option<Vec<usize>> {
+        let levels = self.levels.as_mut()?;
+        for (level, tally) in levels.level.iter_mut().zip(&mut levels.tally) {
+            *level = levels.config.next_level(*level, tally);
+            *tally = LevelTally::default();
+        }
+        Some(levels.level.clone())
     }
 }
 
@@ -401,6 +452,19 @@ impl VecEnv for TaskEnv {
                     },
                 );
         });
+        if let Some(levels) = &mut self.levels {
+            let ended = terminated.iter().zip(truncated.iter());
+            for ((tally, (&term, &trunc)), row) in levels
+                .tally
+                .iter_mut()
+                .zip(ended)
+                .zip(episode_metrics.chunks_exact(m))
+            {
+                if term || trunc {
+                    tally.add(f64::from(row[0]), term);
+                }
+            }
+        }
     }
 }
 
@@ -548,6 +612,7 @@ mod tests {
         let mut env = TaskEnv::new(
             &registry,
             &experiment.terrain,
+            None,
             &experiment.task,
             &Arc::new(RobotModel::laikago()),
             &experiment,
@@ -587,5 +652,74 @@ mod tests {
         for kind in Termination::KINDS {
             assert!(EPISODE_METRICS.contains(&format!("fell_{kind}").as_str()));
         }
+    }
+
+    /// Each world's standing sink on its terrain (0 on rigid ground), m.
+    fn standing_sinks_m(env: &TaskEnv) -> Vec<f64> {
+        env.tasks
+            .iter()
+            .map(|task| {
+                let terrain = task.world().terrain();
+                terrain.regions()[terrain.region_index_at(0.0, 0.0)].expected_sink_m
+            })
+            .collect()
+    }
+
+    /// Three worlds on levels rigid, 2 cm and 5 cm tiles, one-phase
+    /// episodes of zero actions with the `[task]` lines given: each world
+    /// is built on its level; after the iteration the levels move by what
+    /// the episodes did, and the next reset builds each world on its new
+    /// level. Returns the levels after the step.
+    fn levels_after_one_phase(task_lines: &str) -> Vec<usize> {
+        let registry = Arc::new(Registry::builtin());
+        let text = format!(
+            "[[curriculum]]\niterations = 1\n[curriculum.levels]\nterrains = [\"rigid\", \"elastic:2cm\", \"elastic:5cm\"]\n\n[task]\nmax_phases = 1\n{task_lines}[train]\nenvs = 3\n"
+        );
+        let experiment = Experiment::from_toml(&text, "levels.toml", &registry).unwrap();
+        let levels = experiment.levels_at(0).unwrap();
+        let mut env = TaskEnv::new(
+            &registry,
+            &experiment.terrain,
+            Some((levels, vec![0, 1, 2])),
+            &experiment.task,
+            &Arc::new(RobotModel::laikago()),
+            &experiment,
+            2,
+            Arc::new(AtomicBool::new(false)),
+        )
+        .unwrap();
+        let sinks = |env: &TaskEnv| standing_sinks_m(env);
+        let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-9);
+        assert!(close(&sinks(&env), &[0.0, 0.02, 0.05]), "{:?}", sinks(&env));
+        let mut obs = vec![0.0; 3 * env.observation_size()];
+        env.reset_all(5, &mut obs);
+        let mut out = StepResult::new(&env);
+        env.step(&vec![0.0; 3 * env.action_size()], &mut out);
+        assert!((0..3).all(|i| out.ended(i)), "one-phase episodes end");
+        let m = EPISODE_METRICS.len();
+        let expected: Vec<usize> = (0..3)
+            .map(|i| {
+                let mut tally = LevelTally::default();
+                tally.add(f64::from(out.episode_metrics[i * m]), out.terminated[i]);
+                levels.next_level(i, &tally)
+            })
+            .collect();
+        let after = env.advance_levels().expect("the worlds have levels");
+        assert_eq!(after, expected);
+        // the tallies start again: nothing ended since, nothing moves
+        assert_eq!(env.advance_levels().unwrap(), after);
+        env.reset_all(6, &mut obs);
+        let built: Vec<f64> = after.iter().map(|&l| [0.0, 0.02, 0.05][l]).collect();
+        assert!(close(&sinks(&env), &built), "{:?}", sinks(&env));
+        after
+    }
+
+    #[test]
+    fn each_world_trains_on_its_level_and_moves_by_what_its_episodes_did() {
+        // a phase of standing: no fall, but not the metre that moves a world up
+        assert_eq!(levels_after_one_phase(""), [0, 1, 2]);
+        // every episode falls at once (a 0.01-degree pitch limit): each
+        // world moves down, the bottom one stays
+        assert_eq!(levels_after_one_phase("max_pitch_deg = 0.01\n"), [0, 0, 1]);
     }
 }

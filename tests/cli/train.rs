@@ -575,6 +575,72 @@ fn a_stage_that_moves_on_when_ready_ends_early_and_resumes_and_forks_exactly() {
     }
 }
 
+/// `[curriculum.levels]`: every metrics line records each world's level,
+/// which moves by at most one per iteration and carries into the next
+/// stage with levels; a run resumed inside the first stage or at its end,
+/// and a fork from its end, go on from the recorded levels as the
+/// uninterrupted run did.
+#[test]
+fn terrain_levels_are_recorded_and_a_resumed_or_forked_run_goes_on_from_them() {
+    let dir = scratch_dir("levels");
+    let stage = "[[curriculum]]\niterations = 3\n[curriculum.levels]\nterrains = [\"rigid\", \"elastic:1cm\", \"elastic:2cm\"]\npromote_distance_m = 0.001\n";
+    let text = TINY
+        .replace("max_phases = 4\n", "max_phases = 2\nmax_pitch_deg = 80.0\n")
+        .replace(
+            "[train]\n",
+            &format!("{stage}\n{stage}\n[train]\nkeep_checkpoints = 10\n"),
+        );
+    let config = dir.join("levels.toml");
+    std::fs::write(&config, text).unwrap();
+    let train = |run: &Path, extra: &[&str]| {
+        let mut args = vec!["train", "--config", s(&config), "--run-dir", s(run)];
+        args.extend_from_slice(&["--threads", "2", "--rerun", "off"]);
+        args.extend_from_slice(extra);
+        ok(&args)
+    };
+    let a = dir.join("a");
+    let log = train(&a, &[]);
+    assert!(log.contains("| level "), "{log}");
+    let metrics = metrics_without_timing(&a);
+    assert_eq!(metrics.len(), 6);
+    let mut before = vec![0u64, 0];
+    for m in &metrics {
+        let levels: Vec<u64> = serde_json::from_value(m["levels"].clone()).unwrap();
+        assert_eq!(levels.len(), 2, "{m}");
+        for (now, was) in levels.iter().zip(&before) {
+            assert!(
+                *now <= 2 && now.abs_diff(*was) <= 1,
+                "{before:?} then {levels:?}"
+            );
+        }
+        let mean = levels.iter().sum::<u64>() as f64 / 2.0;
+        assert_eq!(m["mean_level"].as_f64(), Some(mean), "{m}");
+        before = levels;
+    }
+    assert!(
+        metrics[2]["levels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| l != 0),
+        "a world has moved up by the end of stage 1: {metrics:?}"
+    );
+    for from in [1, 3] {
+        let b = dir.join(format!("b{from}"));
+        train(&b, &[]);
+        for later in from + 1..=6 {
+            std::fs::remove_dir_all(b.join(format!("checkpoints/iter-{later:06}"))).unwrap();
+        }
+        resume_from(&b.join(format!("checkpoints/iter-{from:06}")));
+        assert_eq!(weights(&a), weights(&b), "resumed from {from}");
+        assert_eq!(metrics_without_timing(&b), metrics, "resumed from {from}");
+    }
+    let forked = dir.join("forked");
+    train(&forked, &["--fork", s(&a.join("checkpoints/iter-000003"))]);
+    assert_eq!(weights(&a), weights(&forked));
+    assert_eq!(metrics_without_timing(&forked), metrics);
+}
+
 /// `export --with-checkpoint`: the exported policy carries its checkpoint,
 /// byte for byte, and a fork from it ends as the fork from the run's own
 /// checkpoint, with the run's metrics up to it.

@@ -1,6 +1,7 @@
-//! `[[curriculum]]`: stages in order, each with its terrain, iterations and
-//! optionally its learning rate and `[curriculum.task]` keys; and what an
-//! experiment trains at a given iteration.
+//! `[[curriculum]]`: stages in order, each with its terrain (or its
+//! `[curriculum.levels]`, a terrain per world), iterations and optionally
+//! its learning rate and `[curriculum.task]` keys; and what an experiment
+//! trains at a given iteration.
 
 use anyhow::{Context, Result, anyhow, bail};
 use robot::task::TaskConfig;
@@ -10,12 +11,16 @@ use terrain_plugins::{Registry, TerrainSpec};
 use super::Experiment;
 use super::advance::{Advance, AdvanceSection};
 use super::defaults::resolve_task;
+use super::levels::{LevelsSection, TerrainLevels};
 
 /// One curriculum stage.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stage {
-    /// the terrain of this stage
+    /// the terrain of this stage; with `levels`, their top one
     pub terrain: TerrainSpec,
+    /// a terrain per world, moving with how each walks
+    /// (`[curriculum.levels]`; `None`: every world on `terrain`)
+    pub levels: Option<TerrainLevels>,
     /// iterations in this stage; with `advance`, at most
     pub iterations: u64,
     /// moving on when the policy is ready (`[curriculum.advance]`)
@@ -37,7 +42,8 @@ pub struct Stage {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct StageSection {
-    terrain: String,
+    #[serde(default)]
+    terrain: Option<String>,
     iterations: u64,
     #[serde(default)]
     learning_rate: Option<f64>,
@@ -45,6 +51,8 @@ struct StageSection {
     task: Option<toml::Table>,
     #[serde(default)]
     advance: Option<AdvanceSection>,
+    #[serde(default)]
+    levels: Option<LevelsSection>,
 }
 
 impl Stage {
@@ -129,6 +137,26 @@ impl Experiment {
                 .learning_rate
                 .unwrap_or(self.learner().learning_rate()),
         )
+    }
+
+    /// The terrain levels of 0-based iteration `iteration`'s stage, if it
+    /// has them.
+    pub fn levels_at(&self, iteration: u64) -> Option<&TerrainLevels> {
+        if self.curriculum.is_empty() {
+            return None;
+        }
+        self.curriculum[self.terrain_at(iteration).0]
+            .levels
+            .as_ref()
+    }
+
+    /// Whether a stage before 0-based iteration `iteration` has terrain
+    /// levels (a run starting there needs the levels its worlds reached).
+    pub fn has_levels_before(&self, iteration: u64) -> bool {
+        (0..self.curriculum.len()).any(|k| {
+            let start: u64 = self.curriculum[..k].iter().map(Stage::length).sum();
+            start < iteration && self.curriculum[k].levels.is_some()
+        })
     }
 
     /// The task of 0-based iteration `iteration`: its curriculum stage's
@@ -257,7 +285,7 @@ pub(super) fn curriculum_from_doc(
     };
     let stages: Vec<StageSection> = value.clone().try_into().map_err(|e: toml::de::Error| {
         anyhow!(
-            "config {source} [[curriculum]]: {} (each stage needs terrain = \"SPEC\" and iterations = N)",
+            "config {source} [[curriculum]]: {} (each stage needs terrain = \"SPEC\", or [curriculum.levels], and iterations = N)",
             e.message()
         )
     })?;
@@ -299,10 +327,27 @@ pub(super) fn curriculum_from_doc(
                         k + 1
                     )
                 })?;
+            let at = || format!("config {source} [[curriculum]] stage {}", k + 1);
+            let (terrain, levels) = match (stage.terrain, stage.levels) {
+                (Some(spec), None) => (registry.parse(&spec).with_context(at)?, None),
+                (None, Some(levels)) => {
+                    let levels = levels
+                        .resolve(registry)
+                        .with_context(|| format!("{} [curriculum.levels]", at()))?;
+                    (levels.terrains[levels.top()].clone(), Some(levels))
+                }
+                (Some(_), Some(_)) => bail!(
+                    "{}: a stage with [curriculum.levels] trains on its levels' terrains; leave terrain out",
+                    at()
+                ),
+                (None, None) => bail!(
+                    "{}: no terrain; give terrain = \"SPEC\" or [curriculum.levels]",
+                    at()
+                ),
+            };
             Ok(Stage {
-                terrain: registry
-                    .parse(&stage.terrain)
-                    .with_context(|| format!("config {source} [[curriculum]] stage {}", k + 1))?,
+                terrain,
+                levels,
                 iterations: stage.iterations,
                 advance,
                 ended_after: None,

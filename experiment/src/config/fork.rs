@@ -9,7 +9,7 @@ impl Experiment {
     /// of `other` at `iterations` is where this experiment would be too).
     /// Compared: the learner and its settings, the physics, the number of
     /// worlds and the seed, and for every iteration before `iterations` its
-    /// terrain, task and learning rate. Not compared: what does not change
+    /// terrain (and terrain levels), task and learning rate. Not compared: what does not change
     /// the training (checkpoint cadence, Rerun environments, the stages'
     /// layout beyond what each iteration runs). Stages that move on when
     /// ready are compared where the run's history ended them: both
@@ -70,6 +70,14 @@ impl Experiment {
             let (a, b) = (self.terrain_at(i).1, other.terrain_at(i).1);
             if a != b {
                 return Some(format!("iteration {}'s terrain: {a} against {b}", i + 1));
+            }
+            if self.levels_at(i) != other.levels_at(i) {
+                return Some(format!(
+                    "iteration {}'s terrain levels: {:?} against {:?}",
+                    i + 1,
+                    self.levels_at(i),
+                    other.levels_at(i)
+                ));
             }
             if self.task_at(i) != other.task_at(i) {
                 return Some(format!(

@@ -39,6 +39,10 @@
 //! [curriculum.advance]    # optional: end the stage when the policy is ready,
 //! survival = 0.95         # iterations then at most (see `advance`)
 //! window = 10
+//! [[curriculum]]          # a stage whose worlds each train on their own
+//! iterations = 300        # terrain level, moving up as they walk (no
+//! [curriculum.levels]     # `terrain`; see `levels`)
+//! terrains = ["rigid", "elastic:1cm", "elastic:2cm"]
 //! ```
 //!
 //! `[task]` is `robot::task::TaskConfig` and `[physics]` `robot::WorldConfig`,
@@ -81,6 +85,7 @@ pub mod advance;
 mod curriculum;
 mod defaults;
 mod fork;
+pub mod levels;
 pub mod residual;
 mod task_overrides;
 mod terrain_table;
@@ -254,6 +259,12 @@ impl Experiment {
         };
         experiment.check_stage_rates(&format!("config {source}"))?;
         experiment.check_stage_critics(&format!("config {source}"))?;
+        if experiment.residual.is_some() && experiment.curriculum.iter().any(|s| s.levels.is_some())
+        {
+            bail!(
+                "config {source}: [curriculum.levels] moves phase-level policies between terrains by how they walk; a [residual] run cannot have them"
+            );
+        }
         Ok(experiment)
     }
 
@@ -319,11 +330,11 @@ impl Experiment {
         );
         text.push_str(&toml::to_string(&tables).expect("a table serialises"));
         for stage in &self.curriculum {
-            text.push_str(&format!(
-                "\n[[curriculum]]\nterrain = {:?}\niterations = {}\n",
-                stage.terrain.to_string(),
-                stage.iterations
-            ));
+            text.push_str("\n[[curriculum]]\n");
+            if stage.levels.is_none() {
+                text.push_str(&format!("terrain = {:?}\n", stage.terrain.to_string()));
+            }
+            text.push_str(&format!("iterations = {}\n", stage.iterations));
             if let Some(rate) = stage.learning_rate {
                 text.push_str(&format!("learning_rate = {rate:?}\n"));
             }
@@ -336,6 +347,9 @@ impl Experiment {
                     text.push_str(&format!("distance_m = {d:?}\n"));
                 }
                 text.push_str(&format!("window = {}\n", rule.window));
+            }
+            if let Some(levels) = &stage.levels {
+                text.push_str(&levels.to_toml());
             }
             if !stage.task_overrides.is_empty() {
                 let (tables, keys): (toml::Table, toml::Table) = stage
@@ -761,6 +775,64 @@ mod tests {
             err.contains("c.toml: privileged_critic") && err.contains("[residual]"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn a_stage_of_terrain_levels_names_its_top_and_round_trips() {
+        let levels = "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[[curriculum]]\niterations = 3\n[curriculum.levels]\nterrains = [\"rigid\", \"elastic:1cm\", \"elastic:2cm\"]\npromote_distance_m = 0.5\n[curriculum.task]\nmax_paid_progress_m = 0.03\n";
+        let e = Experiment::from_toml_builtin(levels, "l.toml").unwrap();
+        assert!(e.levels_at(1).is_none());
+        let stage = e.levels_at(2).expect("stage 2 has levels");
+        assert_eq!(stage.top(), 2);
+        assert_eq!(stage.promote_distance_m, 0.5);
+        assert_eq!(e.terrain_at(4).1.to_string(), "elastic:2cm");
+        assert_eq!(e.task_at(4).max_paid_progress_m, Some(0.03));
+        let resolved = e.to_toml();
+        assert!(
+            resolved.contains("[curriculum.levels]\nterrains = [\"rigid\", \"elastic:1cm\", \"elastic:2cm\"]\npromote_distance_m = 0.5\n"),
+            "{resolved}"
+        );
+        assert_eq!(
+            Experiment::from_toml_builtin(&resolved, "resolved").unwrap(),
+            e
+        );
+        // two runs whose stage 2 has other levels train differently there
+        let other = Experiment::from_toml_builtin(
+            &levels.replace("promote_distance_m = 0.5", "promote_distance_m = 1.0"),
+            "o.toml",
+        )
+        .unwrap();
+        assert_eq!(e.differs_before(&other, 2), None);
+        let difference = e.differs_before(&other, 3).unwrap();
+        assert!(
+            difference.contains("iteration 3's terrain levels"),
+            "{difference}"
+        );
+        for (bad, says) in [
+            (
+                levels.replace(
+                    "[[curriculum]]\niterations = 3\n",
+                    "[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n",
+                ),
+                "l.toml [[curriculum]] stage 2: a stage with [curriculum.levels] trains on its levels' terrains; leave terrain out",
+            ),
+            (
+                "[[curriculum]]\niterations = 3\n".to_string(),
+                "l.toml [[curriculum]] stage 1: no terrain",
+            ),
+            (
+                levels.replace("\"elastic:1cm\"", "\"elastic:1xm\""),
+                "terrains[1] = \"elastic:1xm\"",
+            ),
+            (
+                format!("{levels}\n[residual]\nphase_policy = \"none\"\n"),
+                "l.toml: [curriculum.levels] moves phase-level policies",
+            ),
+        ] {
+            let err = Experiment::from_toml_builtin(&bad, "l.toml").unwrap_err();
+            let err = format!("{err:#}");
+            assert!(err.contains(says), "{err}");
+        }
     }
 
     #[test]

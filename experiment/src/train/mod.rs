@@ -9,6 +9,7 @@
 //! flag it passes in (the command line's Ctrl-C handler does), and the run
 //! then writes the checkpoint of the last completed iteration.
 
+mod levels;
 pub mod metrics;
 mod plan;
 pub mod run_dir;
@@ -31,14 +32,17 @@ use run_dir::{CONFIG_FILE, METRICS_FILE, append_line, keep_metrics_up_to, save_c
 
 use crate::config::Experiment;
 use crate::config::advance::{self, Advance};
+use crate::config::levels::TerrainLevels;
 use crate::task_env::TaskEnv;
 
 /// How a run began, told once before its first iteration.
 pub struct RunStart<'a> {
     /// the learner's name (`ppo`, `sac`, `crossq`)
     pub algo: &'static str,
-    /// the terrain of the first iteration
+    /// the terrain of the first iteration (with `levels`, the top one)
     pub terrain: &'a TerrainSpec,
+    /// the first iteration's terrain levels, if its stage has them
+    pub levels: Option<&'a TerrainLevels>,
     /// parallel worlds
     pub envs: usize,
     /// steps per world per iteration
@@ -77,6 +81,7 @@ pub trait TrainObserver {
         &mut self,
         _stage: usize,
         _terrain: &TerrainSpec,
+        _levels: Option<&TerrainLevels>,
         _learning_rate: Option<f64>,
         _task_overrides: &toml::Table,
     ) {
@@ -171,11 +176,15 @@ pub fn train(
     }
     let latest = run_dir.join(learn::checkpoint::LATEST_LINK);
 
-    // the worlds of 0-based iteration `iteration`: its stage's terrain and task
-    let build_env = |experiment: &Experiment, iteration| {
+    // the worlds of 0-based iteration `iteration`: its stage's terrain (or
+    // each world's level, `world_levels`) and task
+    let build_env = |experiment: &Experiment, iteration, world_levels: &[usize]| {
         TaskEnv::new(
             registry,
             experiment.terrain_at(iteration).1,
+            experiment
+                .levels_at(iteration)
+                .map(|levels| (levels, world_levels.to_vec())),
             experiment.task_at(iteration),
             model,
             experiment,
@@ -195,7 +204,8 @@ pub fn train(
         })
     };
     let mut stage = experiment.terrain_at(start_iteration).0;
-    let mut env = build_env(&experiment, start_iteration)?;
+    let mut world_levels = levels::start_levels(&experiment, &metrics_path, start_iteration)?;
+    let mut env = build_env(&experiment, start_iteration, &world_levels)?;
     widen_critic(&mut *trainer, &env, start_iteration)?;
     for (e, logger) in loggers {
         env.attach_logger(e, logger);
@@ -203,6 +213,7 @@ pub fn train(
     observer.started(&RunStart {
         algo: trainer.name(),
         terrain: experiment.terrain_at(start_iteration).1,
+        levels: experiment.levels_at(start_iteration),
         envs: experiment.train.envs,
         steps_per_env: trainer.steps_per_env(),
         step_unit: if experiment.residual.is_some() {
@@ -223,7 +234,13 @@ pub fn train(
         let stage_rate = experiment.learning_rate_at(iteration);
         if next_stage != stage {
             let loggers = env.detach_loggers();
-            env = build_env(&experiment, iteration)?;
+            world_levels = levels::carry_levels(
+                &experiment,
+                iteration.checked_sub(1),
+                iteration,
+                &world_levels,
+            );
+            env = build_env(&experiment, iteration, &world_levels)?;
             widen_critic(&mut *trainer, &env, iteration)?;
             for l in loggers {
                 env.attach_logger(l.env, l.logger);
@@ -232,6 +249,7 @@ pub fn train(
             observer.stage_started(
                 stage,
                 &terrain,
+                experiment.levels_at(iteration),
                 stage_rate,
                 &experiment.curriculum[stage].task_overrides,
             );
@@ -264,7 +282,11 @@ pub fn train(
         }
         let logging_secs = env.take_logging_secs();
         phases_done += stats.steps;
-        let record = metrics::record(&stats, &terrain, logging_secs);
+        let mut record = metrics::record(&stats, &terrain, logging_secs);
+        if let Some(levels) = env.advance_levels() {
+            levels::add_to_record(&mut record, &levels);
+            world_levels = levels;
+        }
         append_line(&metrics_path, &record.to_string())?;
         if experiment.has_advance_rules() {
             history.push(

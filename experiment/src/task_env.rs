@@ -600,6 +600,17 @@ mod tests {
 
     use super::*;
 
+    /// Every world of `env` reset with `seed` and stepped one phase of zero
+    /// actions, which ends its one-phase episode.
+    fn one_phase_of_zero_actions(env: &mut TaskEnv, seed: u64) -> StepResult {
+        let n = env.num_envs();
+        env.reset_all(seed, &mut vec![0.0; n * env.observation_size()]);
+        let mut out = StepResult::new(env);
+        env.step(&vec![0.0; n * env.action_size()], &mut out);
+        assert!((0..n).all(|i| out.ended(i)), "one-phase episodes end");
+        out
+    }
+
     /// The episode metrics of world 0's first episode, of two worlds on
     /// rigid ground, one-phase episodes and zero actions, with the `[task]`
     /// lines given.
@@ -620,11 +631,7 @@ mod tests {
             Arc::new(AtomicBool::new(false)),
         )
         .unwrap();
-        let mut obs = vec![0.0; 2 * env.observation_size()];
-        env.reset_all(3, &mut obs);
-        let mut out = StepResult::new(&env);
-        env.step(&vec![0.0; 2 * env.action_size()], &mut out);
-        assert!((0..2).all(|i| out.ended(i)), "one-phase episodes end");
+        let out = one_phase_of_zero_actions(&mut env, 3);
         let m = EPISODE_METRICS.len();
         assert_eq!(env.episode_metric_names(), EPISODE_METRICS);
         EPISODE_METRICS
@@ -691,11 +698,7 @@ mod tests {
         let sinks = |env: &TaskEnv| standing_sinks_m(env);
         let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-9);
         assert!(close(&sinks(&env), &[0.0, 0.02, 0.05]), "{:?}", sinks(&env));
-        let mut obs = vec![0.0; 3 * env.observation_size()];
-        env.reset_all(5, &mut obs);
-        let mut out = StepResult::new(&env);
-        env.step(&vec![0.0; 3 * env.action_size()], &mut out);
-        assert!((0..3).all(|i| out.ended(i)), "one-phase episodes end");
+        let out = one_phase_of_zero_actions(&mut env, 5);
         let m = EPISODE_METRICS.len();
         let expected: Vec<usize> = (0..3)
             .map(|i| {
@@ -708,7 +711,7 @@ mod tests {
         assert_eq!(after, expected);
         // the tallies start again: nothing ended since, nothing moves
         assert_eq!(env.advance_levels().unwrap(), after);
-        env.reset_all(6, &mut obs);
+        env.reset_all(6, &mut vec![0.0; 3 * env.observation_size()]);
         let built: Vec<f64> = after.iter().map(|&l| [0.0, 0.02, 0.05][l]).collect();
         assert!(close(&sinks(&env), &built), "{:?}", sinks(&env));
         after

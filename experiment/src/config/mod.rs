@@ -729,6 +729,16 @@ mod tests {
     /// A stage may turn the critic's privileged values on (the policy's
     /// input stays the run's); later stages must keep them; the resolved
     /// file writes the stage's observation table where it belongs.
+    /// `e` written out holds `section` and reads back as `e`.
+    fn writes_and_reads_back(e: &Experiment, section: &str) {
+        let resolved = e.to_toml();
+        assert!(resolved.contains(section), "{resolved}");
+        assert_eq!(
+            &Experiment::from_toml_builtin(&resolved, "resolved").unwrap(),
+            e
+        );
+    }
+
     #[test]
     fn a_stage_turns_the_privileged_critic_on_for_good() {
         let stages = |third: &str| {
@@ -749,14 +759,9 @@ mod tests {
             e.task_at(3).base_height_reference,
             robot::task::BaseHeightReference::Feet
         );
-        let resolved = e.to_toml();
-        assert!(
-            resolved.contains("[curriculum.task.observation]\nprivileged_critic = true\n"),
-            "{resolved}"
-        );
-        assert_eq!(
-            Experiment::from_toml_builtin(&resolved, "resolved").unwrap(),
-            e
+        writes_and_reads_back(
+            &e,
+            "[curriculum.task.observation]\nprivileged_critic = true\n",
         );
         // a later stage without it
         let err = Experiment::from_toml_builtin(&stages(""), "c.toml")
@@ -787,14 +792,9 @@ mod tests {
         assert_eq!(stage.promote_distance_m, 0.5);
         assert_eq!(e.terrain_at(4).1.to_string(), "elastic:2cm");
         assert_eq!(e.task_at(4).max_paid_progress_m, Some(0.03));
-        let resolved = e.to_toml();
-        assert!(
-            resolved.contains("[curriculum.levels]\nterrains = [\"rigid\", \"elastic:1cm\", \"elastic:2cm\"]\npromote_distance_m = 0.5\n"),
-            "{resolved}"
-        );
-        assert_eq!(
-            Experiment::from_toml_builtin(&resolved, "resolved").unwrap(),
-            e
+        writes_and_reads_back(
+            &e,
+            "[curriculum.levels]\nterrains = [\"rigid\", \"elastic:1cm\", \"elastic:2cm\"]\npromote_distance_m = 0.5\n",
         );
         // two runs whose stage 2 has other levels train differently there
         let other = Experiment::from_toml_builtin(

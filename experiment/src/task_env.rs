@@ -695,7 +695,7 @@ mod tests {
             Arc::new(AtomicBool::new(false)),
         )
         .unwrap();
-        let sinks = |env: &TaskEnv| standing_sinks_m(env);
+        let sinks = standing_sinks_m;
         let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-9);
         assert!(close(&sinks(&env), &[0.0, 0.02, 0.05]), "{:?}", sinks(&env));
         let out = one_phase_of_zero_actions(&mut env, 5);

@@ -150,15 +150,6 @@ impl Experiment {
             .as_ref()
     }
 
-    /// Whether a stage before 0-based iteration `iteration` has terrain
-    /// levels (a run starting there needs the levels its worlds reached).
-    pub fn has_levels_before(&self, iteration: u64) -> bool {
-        (0..self.curriculum.len()).any(|k| {
-            let start: u64 = self.curriculum[..k].iter().map(Stage::length).sum();
-            start < iteration && self.curriculum[k].levels.is_some()
-        })
-    }
-
     /// The task of 0-based iteration `iteration`: its curriculum stage's
     /// when the stage sets `[curriculum.task]` keys, else `[task]`.
     pub fn task_at(&self, iteration: u64) -> &TaskConfig {

@@ -726,9 +726,6 @@ mod tests {
         );
     }
 
-    /// A stage may turn the critic's privileged values on (the policy's
-    /// input stays the run's); later stages must keep them; the resolved
-    /// file writes the stage's observation table where it belongs.
     /// `e` written out holds `section` and reads back as `e`.
     fn writes_and_reads_back(e: &Experiment, section: &str) {
         let resolved = e.to_toml();
@@ -739,6 +736,9 @@ mod tests {
         );
     }
 
+    /// A stage may turn the critic's privileged values on (the policy's
+    /// input stays the run's); later stages must keep them; the resolved
+    /// file writes the stage's observation table where it belongs.
     #[test]
     fn a_stage_turns_the_privileged_critic_on_for_good() {
         let stages = |third: &str| {

@@ -12,7 +12,7 @@ use learn::{StepResult, VecEnv};
 use rayon::prelude::*;
 use robot::action::ACTION_SIZE;
 use robot::snapshot::{PhaseObserver, PhaseStart};
-use robot::task::{PhaseOutcome, RewardTerms, Task, TaskConfig, Termination};
+use robot::task::{PhaseOutcome, RewardTerms, Task, TaskConfig, TaskMirror, Termination};
 use robot::{RobotModel, WorldConfig};
 use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
@@ -284,9 +284,34 @@ impl TaskEnv {
     }
 }
 
+/// The task's left-right mirror as the learner reads it: the observation
+/// with its privileged values, and the phase action.
+struct PhaseMirror(TaskMirror);
+
+impl learn::Mirror for PhaseMirror {
+    fn mirror_observation(&self, row: &mut [f32]) {
+        self.0.mirror_observation(row);
+    }
+
+    fn mirror_action(&self, row: &mut [f32]) {
+        robot::task::mirror_action(row);
+    }
+}
+
 impl VecEnv for TaskEnv {
     fn num_envs(&self) -> usize {
         self.tasks.len()
+    }
+
+    fn mirror(&self) -> Result<Arc<dyn learn::Mirror>, String> {
+        if self.residual.is_some() {
+            return Err(
+                "a [residual] run's control-step observation has no left-right mirror".into(),
+            );
+        }
+        let mirror = TaskMirror::new(&self.task_config).map_err(|e| e.to_string())?;
+        debug_assert_eq!(mirror.observation_size(), self.observation_size());
+        Ok(Arc::new(PhaseMirror(mirror)))
     }
 
     fn observation_size(&self) -> usize {

@@ -49,6 +49,11 @@ pub trait VecEnv {
     fn reset_all(&mut self, seed: u64, obs: &mut [f32]);
     /// Applies `N x A` actions and fills `out` (see the module docs).
     fn step(&mut self, actions: &[f32], out: &mut StepResult);
+    /// The environment's left-right mirror (for
+    /// [`crate::PpoConfig::mirror_augmentation`]), or why it has none.
+    fn mirror(&self) -> Result<std::sync::Arc<dyn crate::Mirror>, String> {
+        Err("the environment has no left-right mirror".into())
+    }
     /// Whether the run was asked to stop (Ctrl-C): a learner may then cut
     /// its iteration short, whose results the caller discards.
     fn interrupted(&self) -> bool {

@@ -29,6 +29,7 @@ pub mod checkpoint;
 pub mod env;
 pub mod episodes;
 pub mod export;
+pub mod mirror;
 pub mod mlp;
 pub mod normalizer;
 pub mod onnx;
@@ -42,6 +43,7 @@ pub mod toy;
 
 pub use algorithm::{Algorithm, Figure, IterationStats};
 pub use env::{StepResult, VecEnv};
+pub use mirror::Mirror;
 pub use ppo::{PpoConfig, Trainer};
 pub use registry::Registration;
 pub use settings::{Settings, SettingsValue};

@@ -311,6 +311,12 @@ impl PhaseController {
         };
     }
 
+    /// Makes `phase` the phase about to run (a test's mirrored start).
+    #[cfg(test)]
+    pub(crate) fn start_at_phase(&mut self, phase: usize) {
+        self.memory.phase = phase;
+    }
+
     /// The height the swing foot's P1-P3 heights count from in the phase
     /// about to run from `state`, base frame at the phase start, m: the
     /// foot's height ([`SwingHeightReference::Foot`]), or the point above

@@ -728,6 +728,58 @@ fn a_privileged_critic_trains_resumes_and_its_policy_acts_on_the_plain_observati
     );
 }
 
+/// `[ppo] mirror_augmentation`: every sample is also learned as its
+/// left-right mirror image; the run resumes bit for bit and learns other
+/// weights than without it. With the crawl prior, whose residual action
+/// has no mirror, training stops with an error naming both settings.
+#[test]
+fn mirror_augmentation_trains_resumes_and_is_refused_with_the_crawl_prior() {
+    let dir = scratch_dir("mirror");
+    let config = tiny_variant(
+        &dir,
+        "epochs = 2\n",
+        "epochs = 2\nmirror_augmentation = true\n",
+    );
+    let (a, b, plain) = (dir.join("a"), dir.join("b"), dir.join("plain"));
+    train_on_two_threads(&config, &a, "3");
+    train_on_two_threads(&config, &b, "2");
+    resume_on_two_threads(&b, "3");
+    assert_eq!(weights(&a), weights(&b), "the resumed run differs");
+    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+    train_on_two_threads(&tiny_config(&dir), &plain, "3");
+    assert_ne!(weights(&a), weights(&plain));
+    let saved = std::fs::read_to_string(a.join("config.toml")).unwrap();
+    assert!(saved.contains("mirror_augmentation = true"), "{saved}");
+    rolls_out_two_phases_on_rigid_ground(&a);
+
+    let crawl = dir.join("crawl.toml");
+    let text = std::fs::read_to_string(&config).unwrap();
+    std::fs::write(
+        &crawl,
+        text.replace(
+            "max_phases = 4\n",
+            "max_phases = 4\naction_prior = \"scripted_crawl\"\n",
+        ),
+    )
+    .unwrap();
+    let err = failure(
+        &[
+            "train",
+            "--config",
+            s(&crawl),
+            "--run-dir",
+            s(&dir.join("c")),
+            "--rerun",
+            "off",
+        ],
+        1,
+    );
+    assert!(
+        err.contains("ppo.mirror_augmentation") && err.contains("action_prior"),
+        "{err}"
+    );
+}
+
 /// [`TINY`] learned by SAC: learning starts after 8 transitions.
 const TINY_SAC: &str = "\n[algo]\nname = \"sac\"\n\n[sac]\nhidden_sizes = [16]\nbatch_size = 8\nlearning_starts = 8\nsteps_per_env = 4\nbuffer_size = 1000\n";
 

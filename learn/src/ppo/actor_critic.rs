@@ -189,6 +189,31 @@ impl ActorCritic {
         }
         Ok((actions, log_probs))
     }
+
+    /// Log-probabilities of `k x A` (unclipped) actions under the policy
+    /// for `k x O` observations, `k`, as [`Self::sample`] computes them.
+    pub fn log_probs(&self, obs: &[f32], actions: &[f32]) -> Result<Vec<f32>, LearnError> {
+        let mean = self.mean_actions(obs)?;
+        let log_std: Vec<f32> = self.log_std.as_tensor().to_vec1()?;
+        let a = self.action_size;
+        let log_std_sum: f64 = log_std.iter().map(|&s| f64::from(s)).sum();
+        Ok(mean
+            .chunks_exact(a)
+            .zip(actions.chunks_exact(a))
+            .map(|(row_mean, row_action)| {
+                let square_sum: f64 = row_mean
+                    .iter()
+                    .zip(row_action)
+                    .zip(&log_std)
+                    .map(|((m, x), s)| {
+                        let z = (f64::from(*x) - f64::from(*m)) / f64::from(*s).exp();
+                        z * z
+                    })
+                    .sum();
+                (-0.5 * square_sum - log_std_sum - 0.5 * a as f64 * LN_2PI) as f32
+            })
+            .collect())
+    }
 }
 
 /// Log-density of a diagonal Gaussian: `mean`, `actions` `B x A`,
@@ -251,7 +276,7 @@ mod tests {
     }
 
     #[test]
-    fn sampled_log_probs_agree_with_the_tensor_formula() {
+    fn sampled_and_recomputed_log_probs_agree_with_the_tensor_formula() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let ac = ActorCritic::new((4, 0), 3, &[8, 8], -0.5, &mut rng).unwrap();
         let obs = [0.1f32, -0.2, 0.3, 0.4, 1.0, 0.0, -1.0, 0.5];
@@ -262,8 +287,10 @@ mod tests {
             .unwrap()
             .to_vec1()
             .unwrap();
-        for (x, y) in lp.iter().zip(&lp2) {
+        let lp3 = ac.log_probs(&obs, &actions).unwrap();
+        for ((x, y), z) in lp.iter().zip(&lp2).zip(&lp3) {
             assert!((x - y).abs() < 1e-4, "{x} vs {y}");
+            assert!((x - z).abs() < 1e-5, "{x} vs {z}");
         }
     }
 

@@ -50,6 +50,14 @@ pub struct PpoConfig {
     /// with 0.2 it lasts about 9 (first iteration of `quadwalk train
     /// --terrain rigid --envs 4`), so that there is something to learn from
     pub init_log_std: f64,
+    /// learn from every sample and from its left-right mirror image (the
+    /// environment's [`crate::Mirror`]): each minibatch holds its samples
+    /// and their mirrors, with the same advantages and returns and the
+    /// mirrored action's log-probability under the rollout's policy, and
+    /// the normaliser counts both (rsl_rl's symmetry data augmentation;
+    /// not the paper's). An environment without a mirror is an error
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub mirror_augmentation: bool,
     /// normalise advantages to zero mean, unit variance per minibatch
     pub normalize_advantages: bool,
     /// normalised observations are clipped to +- this
@@ -73,6 +81,7 @@ impl Default for PpoConfig {
             target_kl: None,
             desired_kl: None,
             init_log_std: -1.6,
+            mirror_augmentation: false,
             normalize_advantages: true,
             obs_clip: 10.0,
         }

@@ -29,6 +29,7 @@ use crate::LearnError;
 use crate::algorithm::{Figure, IterationStats, check_sizes};
 use crate::env::{StepResult, VecEnv};
 use crate::episodes::{EpisodeCollector, EpisodeStats};
+use crate::mirror::Mirror;
 use crate::mlp::with_zero_rows;
 use crate::normalizer::ObsNormalizer;
 use crate::optim::{Adam, check_learning_rate, clip_grad_norm, gradients};
@@ -40,12 +41,24 @@ struct Rollout {
     buffer: RolloutBuffer,
     /// the raw observations after the last step (for the bootstrap values)
     last_raw_obs: Vec<f32>,
+    /// with `mirror_augmentation`: every sample's mirror image
+    mirrored: Option<MirroredSamples>,
     /// the episodes that ended and the rewards
     episodes: EpisodeStats,
     /// seconds stepping the environments
     env_secs: f64,
     /// seconds in the network while collecting
     inference_secs: f64,
+}
+
+/// The mirror images of a rollout's samples, in the buffer's order.
+struct MirroredSamples {
+    /// `T x N x O`: mirrored raw observations, normalised
+    obs: Vec<f32>,
+    /// `T x N x A`: mirrored sampled actions
+    actions: Vec<f32>,
+    /// `T x N`: their log-probabilities under the rollout's policy
+    log_probs: Vec<f32>,
 }
 
 /// What one update did: means over its minibatch steps.
@@ -310,12 +323,20 @@ impl Trainer {
     /// Runs one iteration: collect, advantages, update.
     pub fn iterate(&mut self, env: &mut dyn VecEnv) -> Result<IterationStats, LearnError> {
         self.check_env(env)?;
+        let mirror = if self.config.mirror_augmentation {
+            let mirror = env.mirror().map_err(|why| {
+                LearnError::Config(format!("ppo.mirror_augmentation = true: {why}"))
+            })?;
+            Some(mirror)
+        } else {
+            None
+        };
         let started = Instant::now();
-        let rollout = self.collect(env)?;
+        let rollout = self.collect(env, mirror.as_deref())?;
         let update_clock = Instant::now();
         let advantages = self.advantages(&rollout)?;
         let steps = rollout.buffer.rewards.len();
-        let update = self.update(rollout.buffer, advantages)?;
+        let update = self.update(rollout.buffer, rollout.mirrored, advantages)?;
         let update_secs = update_clock.elapsed().as_secs_f64();
         self.iteration += 1;
         Ok(IterationStats {
@@ -335,8 +356,14 @@ impl Trainer {
 
     /// Collects `steps_per_env` steps of every environment from fresh
     /// episodes, sampling from the policy; episodes cut by the
-    /// environment's time limit are bootstrapped from the critic.
-    fn collect(&mut self, env: &mut dyn VecEnv) -> Result<Rollout, LearnError> {
+    /// environment's time limit are bootstrapped from the critic. With a
+    /// `mirror`, also each sample's mirror image (the normaliser counts
+    /// both).
+    fn collect(
+        &mut self,
+        env: &mut dyn VecEnv,
+        mirror: Option<&dyn Mirror>,
+    ) -> Result<Rollout, LearnError> {
         let n = env.num_envs();
         let o = env.observation_size();
         let a = env.action_size();
@@ -353,15 +380,42 @@ impl Trainer {
         let mut out = StepResult::new(env);
 
         let mut buffer = RolloutBuffer::new(n, o, a, steps);
+        let mut mirrored = mirror.map(|_| MirroredSamples {
+            obs: Vec::with_capacity(steps * n * o),
+            actions: Vec::with_capacity(steps * n * a),
+            log_probs: Vec::with_capacity(steps * n),
+        });
 
         for _ in 0..steps {
             let clock = Instant::now();
             self.normalizer.update(&raw_obs);
+            let mirrored_raw_obs = mirror.map(|m| {
+                let mut rows = raw_obs.clone();
+                rows.chunks_exact_mut(o)
+                    .for_each(|row| m.mirror_observation(row));
+                self.normalizer.update(&rows);
+                rows
+            });
             let mut obs = raw_obs.clone();
             self.normalizer.normalize(&mut obs);
             let (actions, log_probs) = self
                 .policy
                 .sample(&self.policy.actor_part(&obs), &mut self.rng)?;
+            if let (Some(m), Some(samples), Some(mut mirrored_obs)) =
+                (mirror, mirrored.as_mut(), mirrored_raw_obs)
+            {
+                self.normalizer.normalize(&mut mirrored_obs);
+                let mut mirrored_actions = actions.clone();
+                mirrored_actions
+                    .chunks_exact_mut(a)
+                    .for_each(|row| m.mirror_action(row));
+                let log_probs = self
+                    .policy
+                    .log_probs(&self.policy.actor_part(&mirrored_obs), &mirrored_actions)?;
+                samples.obs.extend(mirrored_obs);
+                samples.actions.extend(mirrored_actions);
+                samples.log_probs.extend(log_probs);
+            }
             let values = self.policy.values(&obs)?;
             let clipped: Vec<f32> = actions.iter().map(|x| x.clamp(-1.0, 1.0)).collect();
             inference_secs += clock.elapsed().as_secs_f64();
@@ -405,6 +459,7 @@ impl Trainer {
         }
         Ok(Rollout {
             buffer,
+            mirrored,
             last_raw_obs: raw_obs,
             episodes: episodes.finish(steps * n),
             env_secs,
@@ -431,17 +486,37 @@ impl Trainer {
 
     /// `epochs` passes of shuffled minibatch steps on the clipped
     /// objective, the value loss and the entropy bonus (stopped early by
-    /// `target_kl`; the rate moved by `desired_kl`).
-    fn update(&mut self, buffer: RolloutBuffer, g: Gae) -> Result<PpoUpdate, LearnError> {
+    /// `target_kl`; the rate moved by `desired_kl`). With `mirrored`
+    /// samples each minibatch also holds the mirrors of its samples, with
+    /// their advantages and returns.
+    fn update(
+        &mut self,
+        buffer: RolloutBuffer,
+        mirrored: Option<MirroredSamples>,
+        g: Gae,
+    ) -> Result<PpoUpdate, LearnError> {
         let explained_variance = explained_variance(&buffer.values, &g.returns);
         let o = self.policy.obs_size() + self.policy.privileged_size();
         let a = self.policy.action_size();
         let total = buffer.rewards.len();
         let device = self.policy.device().clone();
-        let all_obs = Tensor::from_vec(buffer.obs, (total, o), &device)?;
-        let all_actions = Tensor::from_vec(buffer.actions, (total, a), &device)?;
-        let all_log_probs = Tensor::from_vec(buffer.log_probs, total, &device)?;
-        let all_returns = Tensor::from_vec(g.returns, total, &device)?;
+        // rows 0..total the samples, total..2 total their mirrors
+        let (mut obs, mut actions, mut log_probs) = (buffer.obs, buffer.actions, buffer.log_probs);
+        let mut returns = g.returns;
+        let copies = if let Some(m) = mirrored {
+            obs.extend(m.obs);
+            actions.extend(m.actions);
+            log_probs.extend(m.log_probs);
+            returns.extend_from_within(..);
+            2
+        } else {
+            1
+        };
+        let row_count = copies * total;
+        let all_obs = Tensor::from_vec(obs, (row_count, o), &device)?;
+        let all_actions = Tensor::from_vec(actions, (row_count, a), &device)?;
+        let all_log_probs = Tensor::from_vec(log_probs, row_count, &device)?;
+        let all_returns = Tensor::from_vec(returns, row_count, &device)?;
         let advantages = g.advantages;
         let minibatch = self.config.minibatch_size.min(total);
         let actor_vars = self.policy.actor_vars();
@@ -455,8 +530,14 @@ impl Trainer {
             epochs_run += 1;
             let order = self.permutation(total);
             for chunk in order.chunks(minibatch) {
-                let index = Tensor::from_vec(chunk.to_vec(), chunk.len(), &device)?;
-                let mut adv: Vec<f32> = chunk.iter().map(|&k| advantages[k as usize]).collect();
+                let rows: Vec<u32> = (0..copies as u32)
+                    .flat_map(|copy| chunk.iter().map(move |&k| k + copy * total as u32))
+                    .collect();
+                let index = Tensor::from_vec(rows.clone(), rows.len(), &device)?;
+                let mut adv: Vec<f32> = rows
+                    .iter()
+                    .map(|&k| advantages[k as usize % total])
+                    .collect();
                 if self.config.normalize_advantages {
                     normalize_in_place(&mut adv);
                 }
@@ -464,7 +545,7 @@ impl Trainer {
                     obs: all_obs.index_select(&index, 0)?,
                     actions: all_actions.index_select(&index, 0)?,
                     old_log_probs: all_log_probs.index_select(&index, 0)?,
-                    advantages: Tensor::from_vec(adv, chunk.len(), &device)?,
+                    advantages: Tensor::from_vec(adv, rows.len(), &device)?,
                     returns: all_returns.index_select(&index, 0)?,
                 };
                 let loss = ppo_loss(&self.policy, &batch, &self.config)?;

@@ -107,10 +107,12 @@
 //! | `mod.rs` | the [`Task`]: reset, the phase loop, goals, snapshots |
 //! | `config.rs` | [`TaskConfig`] and its choices ([`DistanceReward`], [`BalanceTerms`], [`ActionPrior`]) |
 //! | `observation.rs` | [`ObservationConfig`] and the observation vector |
+//! | `mirror.rs` | [`TaskMirror`]: the observation and action reflected left-right |
 //! | `reward.rs` | [`RewardTerms`]: the five terms' formulas |
 //! | `termination.rs` | [`Termination`] and its rules |
 
 mod config;
+mod mirror;
 mod observation;
 mod phase;
 mod reward;
@@ -120,6 +122,7 @@ pub use config::{
     ActionPrior, BalanceTerms, BaseHeightReference, DistanceReward, PitchReference,
     SwingHeightReference, TaskConfig, TaskConfigError,
 };
+pub use mirror::{MirrorError, TaskMirror, mirror_action};
 pub use observation::{FOOT_HISTORY_PHASES, ObservationConfig};
 pub use phase::PhaseRun;
 pub use reward::RewardTerms;

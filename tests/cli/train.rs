@@ -40,6 +40,36 @@ pub(crate) fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Trains `config` 3 iterations into `dir/a`, and 2 into `dir/b` resumed
+/// to 3, on two threads: the two runs' weights and metrics must be the
+/// same. Returns `dir/a`.
+fn three_iterations_resumed_bit_for_bit(config: &Path, dir: &Path) -> PathBuf {
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    train_on_two_threads(config, &a, "3");
+    train_on_two_threads(config, &b, "2");
+    resume_on_two_threads(&b, "3");
+    assert_eq!(weights(&a), weights(&b), "the resumed run differs");
+    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+    a
+}
+
+/// Runs `quadwalk train --config CONFIG --run-dir RUN`, which must fail
+/// with exit code 1; returns its stderr.
+fn training_fails(config: &Path, run: &Path) -> String {
+    failure(
+        &[
+            "train",
+            "--config",
+            s(config),
+            "--run-dir",
+            s(run),
+            "--rerun",
+            "off",
+        ],
+        1,
+    )
+}
+
 /// Runs `quadwalk ARGS`, which must succeed; returns its stderr.
 fn ok(args: &[&str]) -> String {
     let out = quadwalk(args);
@@ -696,11 +726,7 @@ fn a_privileged_critic_trains_resumes_and_its_policy_acts_on_the_plain_observati
         "[task]\nmax_phases = 4\n",
         "[task]\nmax_phases = 4\n\n[task.observation]\nprivileged_critic = true\n",
     );
-    let (a, b) = (dir.join("a"), dir.join("b"));
-    train_on_two_threads(&config, &a, "3");
-    train_on_two_threads(&config, &b, "2");
-    resume_on_two_threads(&b, "3");
-    assert_eq!(weights(&a), weights(&b), "the resumed run differs");
+    let a = three_iterations_resumed_bit_for_bit(&config, &dir);
     let state = std::fs::read_to_string(a.join("latest/state.toml")).unwrap();
     assert!(
         state.contains("obs_size = 102") && state.contains("privileged_size = 12"),
@@ -710,18 +736,7 @@ fn a_privileged_critic_trains_resumes_and_its_policy_acts_on_the_plain_observati
     let sac = dir.join("sac.toml");
     let text = std::fs::read_to_string(&config).unwrap();
     std::fs::write(&sac, format!("{text}{TINY_SAC}")).unwrap();
-    let err = failure(
-        &[
-            "train",
-            "--config",
-            s(&sac),
-            "--run-dir",
-            s(&dir.join("c")),
-            "--rerun",
-            "off",
-        ],
-        1,
-    );
+    let err = training_fails(&sac, &dir.join("c"));
     assert!(
         err.contains("privileged_critic") && err.contains("PPO"),
         "{err}"
@@ -740,12 +755,8 @@ fn mirror_augmentation_trains_resumes_and_is_refused_with_the_crawl_prior() {
         "epochs = 2\n",
         "epochs = 2\nmirror_augmentation = true\n",
     );
-    let (a, b, plain) = (dir.join("a"), dir.join("b"), dir.join("plain"));
-    train_on_two_threads(&config, &a, "3");
-    train_on_two_threads(&config, &b, "2");
-    resume_on_two_threads(&b, "3");
-    assert_eq!(weights(&a), weights(&b), "the resumed run differs");
-    assert_eq!(metrics_without_timing(&a), metrics_without_timing(&b));
+    let a = three_iterations_resumed_bit_for_bit(&config, &dir);
+    let plain = dir.join("plain");
     train_on_two_threads(&tiny_config(&dir), &plain, "3");
     assert_ne!(weights(&a), weights(&plain));
     let saved = std::fs::read_to_string(a.join("config.toml")).unwrap();
@@ -762,18 +773,7 @@ fn mirror_augmentation_trains_resumes_and_is_refused_with_the_crawl_prior() {
         ),
     )
     .unwrap();
-    let err = failure(
-        &[
-            "train",
-            "--config",
-            s(&crawl),
-            "--run-dir",
-            s(&dir.join("c")),
-            "--rerun",
-            "off",
-        ],
-        1,
-    );
+    let err = training_fails(&crawl, &dir.join("c"));
     assert!(
         err.contains("ppo.mirror_augmentation") && err.contains("action_prior"),
         "{err}"

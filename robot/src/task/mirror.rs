@@ -30,7 +30,10 @@
 //! i.e. for |P3 y| <= 4 cm.
 //!
 //! The terrains are symmetric only in distribution (tiles, regions and
-//! starts drawn at random), which is what augmentation asks; with the
+//! starts drawn at random), which is what augmentation asks, and the
+//! Laikago's URDF is not exactly symmetric (its left and right upper legs
+//! differ in inertia by 0.001 kg m^2), so a mirrored phase is what the
+//! robot would do to that precision (the test below measures it). With the
 //! scripted-crawl action prior the policy's action is a residual on an
 //! action in the observation, whose mirror is not this affine map, so the
 //! mirror is refused there.

@@ -185,7 +185,7 @@ impl ActorCritic {
                 *out = (f64::from(*m) + f64::from(*s).exp() * z) as f32;
                 square_sum += z * z;
             }
-            log_probs.push((-0.5 * square_sum - log_std_sum - 0.5 * a as f64 * LN_2PI) as f32);
+            log_probs.push(diagonal_gaussian_log_prob(square_sum, log_std_sum, a));
         }
         Ok((actions, log_probs))
     }
@@ -210,10 +210,18 @@ impl ActorCritic {
                         z * z
                     })
                     .sum();
-                (-0.5 * square_sum - log_std_sum - 0.5 * a as f64 * LN_2PI) as f32
+                diagonal_gaussian_log_prob(square_sum, log_std_sum, a)
             })
             .collect())
     }
+}
+
+/// `log p(a) = -1/2 sum_j z_j^2 - sum_j log sigma_j - A/2 ln(2 pi)` from
+/// `square_sum` = sum_j z_j^2 and `log_std_sum` = sum_j log sigma_j, for
+/// `action_size` = A (what [`ActorCritic::sample`] and
+/// [`ActorCritic::log_probs`] compute per row).
+fn diagonal_gaussian_log_prob(square_sum: f64, log_std_sum: f64, action_size: usize) -> f32 {
+    (-0.5 * square_sum - log_std_sum - 0.5 * action_size as f64 * LN_2PI) as f32
 }
 
 /// Log-density of a diagonal Gaussian: `mean`, `actions` `B x A`,

@@ -116,12 +116,13 @@ impl TaskMirror {
                 }
             }
         }
-        let privileged_start = observation.size();
-        for leg in MIRROR_LEG {
-            let from = privileged_start + 3 * leg;
-            slots.extend((from..from + 3).map(kept));
+        if observation.privileged_size() > 0 {
+            let privileged_start = observation.size();
+            for leg in MIRROR_LEG {
+                let from = privileged_start + 3 * leg;
+                slots.extend((from..from + 3).map(kept));
+            }
         }
-        slots.truncate(privileged_start + observation.privileged_size());
         Self { slots }
     }
 

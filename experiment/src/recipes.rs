@@ -2,12 +2,12 @@
 //! no `--config` is given and quadwalk has a recipe for SPEC.
 //!
 //! A recipe is an experiment file in `configs/`, compiled in, so the command
-//! users type first trains what docs/notebook/2026-11-30-policies-that-walk.md measured best rather than the
+//! users type first trains what the notebook measured best rather than the
 //! bare defaults. Today one: `elastic:5cm`, the 5 cm recipe
-//! (`configs/elastic-5cm-line.toml`: the rigid recipe, tiles that deepen a
-//! centimetre at a time, then 5 cm tiles; the policy observes the goals'
-//! line ahead). An experiment file whose `[terrain]` names the same spec
-//! trains without it.
+//! (`configs/elastic-5cm-levels.toml`: a terrain level per world from rigid
+//! ground to 5 cm tiles with mirror augmentation, then 5 cm tiles; the
+//! policy observes the goals' line ahead). An experiment file whose
+//! `[terrain]` names the same spec trains without it.
 
 use anyhow::{Context, Result};
 use terrain_plugins::Registry;
@@ -28,8 +28,8 @@ pub struct Recipe {
 /// Every built-in recipe.
 pub const RECIPES: [Recipe; 1] = [Recipe {
     terrain: "elastic:5cm",
-    path: "configs/elastic-5cm-line.toml",
-    toml: include_str!("../../configs/elastic-5cm-line.toml"),
+    path: "configs/elastic-5cm-levels.toml",
+    toml: include_str!("../../configs/elastic-5cm-levels.toml"),
 }];
 
 /// The recipe for `experiment`'s terrain, if quadwalk has one.
@@ -46,12 +46,20 @@ impl Recipe {
     }
 
     /// One line on what the recipe does, from its stages (consecutive
-    /// stages on one terrain counted together).
+    /// stages on one terrain counted together; a stage of terrain levels
+    /// named by its lowest and highest level).
     pub fn describe(&self, experiment: &Experiment) -> String {
         // consecutive fixed stages on one terrain read as one
         let mut runs: Vec<(String, u64, Option<String>)> = Vec::new();
         for stage in &experiment.curriculum {
-            let terrain = stage.terrain.to_string();
+            let terrain = match &stage.levels {
+                Some(levels) => format!(
+                    "levels {}..{}",
+                    levels.terrains[0],
+                    levels.terrains[levels.top()]
+                ),
+                None => stage.terrain.to_string(),
+            };
             let survival = stage.advance.map(|rule| rule.describe());
             match runs.last_mut() {
                 Some((last, n, None)) if *last == terrain && survival.is_none() => {
@@ -105,9 +113,9 @@ mod tests {
         }
         let five = RECIPES[0].experiment(&registry).unwrap();
         assert!(
-            RECIPES[0].describe(&five).contains(
-                "rigid x260 -> elastic:2cm x60 -> elastic:3cm x60 -> elastic:4cm x60 -> elastic:5cm x400 (840 iterations)"
-            ),
+            RECIPES[0]
+                .describe(&five)
+                .contains("levels rigid..elastic:5cm x280 -> elastic:5cm x280 (560 iterations)"),
             "{}",
             RECIPES[0].describe(&five)
         );

@@ -195,7 +195,7 @@ def main() -> None:
     ap.add_argument("--from", dest="sources", nargs="+", default=[], help="JSON files of earlier runs (markdown)")
     ap.add_argument("--quadwalk", default=shutil.which("quadwalk") or os.path.join(ROOT, "target", "release", "quadwalk"))
     ap.add_argument("--crawl-phases", type=int, default=160)
-    ap.add_argument("--policy", nargs="+", default=["policies/rigid", "policies/elastic-5cm", "policies/tv2"])
+    ap.add_argument("--policy", nargs="+", default=["policies/rigid", "policies/elastic-5cm-line", "policies/tv2"])
     ap.add_argument("--terrain", nargs="+", default=["rigid", "elastic:2cm", "elastic:5cm"])
     ap.add_argument("--episodes", type=int, default=10)
     ap.add_argument("--phases", type=int, default=400)

@@ -1,6 +1,6 @@
 """The shipped policies as ONNX graphs (`quadwalk onnx`): onnxruntime gives
 the actions quadwalk gives, on 1,000 observations recorded from the shipped
-policies' own episodes (a sixth from each) and on values far outside them."""
+policies' own episodes (an equal share from each) and on values far outside them."""
 
 import subprocess
 
@@ -12,7 +12,7 @@ import quadwalk
 onnx = pytest.importorskip("onnx", reason="the ONNX tests need onnx (pytest_suite.rs installs it)")
 ort = pytest.importorskip("onnxruntime", reason="the ONNX tests need onnxruntime (pytest_suite.rs installs it)")
 
-SHIPPED = ["rigid", "elastic-5cm", "tv2", "tv8", "tc2", "tc5"]
+SHIPPED = ["rigid", "elastic-5cm", "elastic-5cm-line", "tv2", "tv8", "tc2", "tc5"]
 
 
 def own_observations(policy, worlds: int = 10, phases: int = 17, seed: int = 2_000_000):
@@ -29,8 +29,13 @@ def own_observations(policy, worlds: int = 10, phases: int = 17, seed: int = 2_0
 
 @pytest.fixture(scope="module")
 def recorded(root):
-    """1,000 observations: 170 from each shipped policy's episodes, cut to 1,000."""
-    rows = [own_observations(quadwalk.Policy.load(str(root / "policies" / n))) for n in SHIPPED]
+    """1,000 observations: 10 worlds x ceil(100 / policies) phases of each
+    shipped policy's episodes, the first 1,000 kept."""
+    phases = -(-100 // len(SHIPPED))
+    rows = [
+        own_observations(quadwalk.Policy.load(str(root / "policies" / n)), phases=phases)
+        for n in SHIPPED
+    ]
     return np.concatenate(rows)[:1000]
 
 

@@ -115,7 +115,7 @@ mod tests {
         assert!(
             RECIPES[0]
                 .describe(&five)
-                .contains("levels rigid..elastic:5cm x280 -> elastic:5cm x280 (560 iterations)"),
+                .contains("levels rigid..elastic:5cm x280 -> elastic:5cm x220 (500 iterations)"),
             "{}",
             RECIPES[0].describe(&five)
         );

@@ -1386,7 +1386,7 @@ fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
         1,
     );
     assert!(
-        err.contains("--iterations 100000: the curriculum has 560 iterations"),
+        err.contains("--iterations 100000: the curriculum has 500 iterations"),
         "{err}"
     );
 }

@@ -1429,6 +1429,24 @@ fn the_readme_command_trains_its_first_iterations_as_the_shipped_run_did() {
     let shipped: Vec<_> = shipped.lines().take(2).map(without_times).collect();
     assert_eq!(ours.len(), 2);
     for (k, (a, b)) in ours.iter().zip(&shipped).enumerate() {
+        // `falls_by_cause` holds shares: times the episodes, they are the
+        // episodes that ended in a fall
+        let causes = &a["falls_by_cause"];
+        let shares: f64 = causes
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|s| s.as_f64().unwrap())
+            .sum();
+        let (episodes, falls) = (
+            a["episodes"].as_f64().unwrap(),
+            a["terminated"].as_f64().unwrap(),
+        );
+        assert!(falls > 0.0, "{a}");
+        assert!(
+            (shares * episodes - falls).abs() < 1e-6,
+            "{causes} x {episodes} episodes against {falls} falls"
+        );
         assert_eq!(a, b, "iteration {}", k + 1);
     }
 }

@@ -3,11 +3,14 @@
 //!
 //! A recipe is an experiment file in `configs/`, compiled in, so the command
 //! users type first trains what the notebook measured best rather than the
-//! bare defaults. Today one: `elastic:5cm`, the 5 cm recipe
+//! bare defaults. Two: `elastic:5cm`, the 5 cm recipe
 //! (`configs/elastic-5cm-levels.toml`: a terrain level per world from rigid
 //! ground to 5 cm tiles with mirror augmentation, then 5 cm tiles; the
-//! policy observes the goals' line ahead). An experiment file whose
-//! `[terrain]` names the same spec trains without it.
+//! policy observes the goals' line ahead), and the paper's T_v2,
+//! `varying:2m:2,3,4,5cm,rigid` (`configs/tv2-levels.toml`: the 5 cm
+//! recipe's first 460 iterations, then the passages between rigid ground
+//! and deep tiles). An experiment file whose `[terrain]` names the same spec
+//! trains without it.
 
 use anyhow::{Context, Result};
 use terrain_plugins::Registry;
@@ -26,11 +29,18 @@ pub struct Recipe {
 }
 
 /// Every built-in recipe.
-pub const RECIPES: [Recipe; 1] = [Recipe {
-    terrain: "elastic:5cm",
-    path: "configs/elastic-5cm-levels.toml",
-    toml: include_str!("../../configs/elastic-5cm-levels.toml"),
-}];
+pub const RECIPES: [Recipe; 2] = [
+    Recipe {
+        terrain: "elastic:5cm",
+        path: "configs/elastic-5cm-levels.toml",
+        toml: include_str!("../../configs/elastic-5cm-levels.toml"),
+    },
+    Recipe {
+        terrain: "varying:2m:2cm,3cm,4cm,5cm,rigid",
+        path: "configs/tv2-levels.toml",
+        toml: include_str!("../../configs/tv2-levels.toml"),
+    },
+];
 
 /// The recipe for `experiment`'s terrain, if quadwalk has one.
 pub fn recipe_for(experiment: &Experiment) -> Option<&'static Recipe> {
@@ -103,15 +113,14 @@ mod tests {
             assert_eq!(e.terrain.to_string(), recipe.terrain, "{}", recipe.path);
             assert!(recipe_for(&e).is_some());
             assert!(!e.curriculum.is_empty(), "{}", recipe.path);
-            let last = e.curriculum.last().unwrap();
-            assert_eq!(
-                last.terrain.to_string(),
-                recipe.terrain,
-                "it ends on its terrain"
-            );
             assert!(recipe.describe(&e).contains(recipe.path));
         }
         let five = RECIPES[0].experiment(&registry).unwrap();
+        assert_eq!(
+            five.curriculum.last().unwrap().terrain.to_string(),
+            "elastic:5cm",
+            "the 5 cm recipe ends on its terrain"
+        );
         assert!(
             RECIPES[0]
                 .describe(&five)
@@ -119,6 +128,23 @@ mod tests {
             "{}",
             RECIPES[0].describe(&five)
         );
+        // T_v2's recipe is the 5 cm recipe's first 460 iterations, stage
+        // for stage, so that either forks into the other at 460
+        let tv2 = RECIPES[1].experiment(&registry).unwrap();
+        assert!(
+            RECIPES[1].describe(&tv2).contains(
+                "levels rigid..elastic:5cm x280 -> elastic:5cm x180 -> varying:2m:4cm,5cm,rigid x40 (500 iterations)"
+            ),
+            "{}",
+            RECIPES[1].describe(&tv2)
+        );
+        assert_eq!(
+            tv2.curriculum.last().unwrap().terrain.to_string(),
+            "varying:2m:4cm,5cm,rigid",
+            "T_v2's recipe ends on T_v2's hardest passages"
+        );
+        assert_eq!(tv2.differs_before(&five, 460), None);
+        assert!(tv2.differs_before(&five, 461).is_some());
         let rigid = Experiment::for_terrain(registry.parse("rigid").unwrap());
         assert!(recipe_for(&rigid).is_none());
     }

@@ -12,7 +12,7 @@ import quadwalk
 onnx = pytest.importorskip("onnx", reason="the ONNX tests need onnx (pytest_suite.rs installs it)")
 ort = pytest.importorskip("onnxruntime", reason="the ONNX tests need onnxruntime (pytest_suite.rs installs it)")
 
-SHIPPED = ["rigid", "elastic-5cm", "elastic-5cm-line", "tv2", "tv8", "tc2", "tc5"]
+SHIPPED = ["rigid", "elastic-5cm", "elastic-5cm-line", "tv2", "tv2-levels", "tv8", "tc2", "tc5"]
 
 
 def own_observations(policy, worlds: int = 10, phases: int = 17, seed: int = 2_000_000):

@@ -1334,16 +1334,16 @@ fn damaged_and_mismatched_checkpoints_give_clear_errors() {
     );
 }
 
-/// `train --terrain elastic:5cm` runs the built-in 5 cm recipe, and
-/// `--iterations` keeps its first stages.
-#[test]
-fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
-    let dir = scratch_dir("recipe");
+/// `train --terrain TERRAIN --iterations 1` on 2 worlds with no config, and
+/// `train --terrain TERRAIN --iterations too_many`: the first run's stderr
+/// and `config.toml`, and the refusal's stderr.
+fn train_built_in_recipe(terrain: &str, name: &str, too_many: &str) -> (String, String, String) {
+    let dir = scratch_dir(name);
     let run = dir.join("run");
     let stderr = ok(&[
         "train",
         "--terrain",
-        "elastic:5cm",
+        terrain,
         "--envs",
         "2",
         "--iterations",
@@ -1355,12 +1355,34 @@ fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
         "--rerun",
         "off",
     ]);
+    let config = std::fs::read_to_string(run.join("config.toml")).unwrap();
+    let refusal = failure(
+        &[
+            "train",
+            "--terrain",
+            terrain,
+            "--iterations",
+            too_many,
+            "--run-dir",
+            s(&dir.join("long")),
+            "--rerun",
+            "off",
+        ],
+        1,
+    );
+    (stderr, config, refusal)
+}
+
+/// `train --terrain elastic:5cm` runs the built-in 5 cm recipe, and
+/// `--iterations` keeps its first stages.
+#[test]
+fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
+    let (stderr, config, err) = train_built_in_recipe("elastic:5cm", "recipe", "100000");
     assert!(
         stderr.contains("elastic:5cm: quadwalk's recipe (configs/elastic-5cm-levels.toml)")
             && stderr.contains("training (ppo) on terrain levels rigid, elastic:5mm"),
         "{stderr}"
     );
-    let config = std::fs::read_to_string(run.join("config.toml")).unwrap();
     assert!(
         config.contains("goal_line_ahead_m = 1.0") && config.contains("mirror_augmentation = true"),
         "{config}"
@@ -1371,22 +1393,33 @@ fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
         "one iteration of the first stage: {config}"
     );
     // more iterations than the recipe has: refused, naming its total
-    let err = failure(
-        &[
-            "train",
-            "--terrain",
-            "elastic:5cm",
-            "--iterations",
-            "100000",
-            "--run-dir",
-            s(&dir.join("long")),
-            "--rerun",
-            "off",
-        ],
-        1,
-    );
     assert!(
         err.contains("--iterations 100000: the curriculum has 500 iterations"),
+        "{err}"
+    );
+}
+
+/// `train --terrain` with T_v2, spelled as the paper's table spells it,
+/// runs the built-in T_v2 recipe: the 5 cm recipe's stages, then the
+/// passages between rigid ground and deep tiles.
+#[test]
+fn the_tv2_terrain_trains_the_built_in_tv2_recipe() {
+    let (stderr, config, err) =
+        train_built_in_recipe("varying:2m:2,3,4,5cm,rigid", "recipe-tv2", "501");
+    assert!(
+        stderr.contains(
+            "varying:2m:2cm,3cm,4cm,5cm,rigid: quadwalk's recipe (configs/tv2-levels.toml): levels rigid..elastic:5cm x280 -> elastic:5cm x180 -> varying:2m:4cm,5cm,rigid x40 (500 iterations)"
+        ) && stderr.contains("training (ppo) on terrain levels rigid, elastic:5mm"),
+        "{stderr}"
+    );
+    assert!(
+        config.contains("spec = \"varying:2m:2cm,3cm,4cm,5cm,rigid\"")
+            && config.contains("mirror_augmentation = true"),
+        "{config}"
+    );
+    // one past the recipe's last iteration: refused, naming its total
+    assert!(
+        err.contains("--iterations 501: the curriculum has 500 iterations"),
         "{err}"
     );
 }

@@ -1,6 +1,6 @@
 """The shipped policies as ONNX graphs (`quadwalk onnx`): onnxruntime gives
 the actions quadwalk gives, on 1,000 observations recorded from the shipped
-policies' own episodes (an equal share from each) and on values far outside them."""
+policies' own episodes (about an equal share from each) and on values far outside them."""
 
 import subprocess
 

@@ -4,12 +4,13 @@
 //! A recipe is an experiment file in `configs/`, compiled in, so the command
 //! users type first trains what the notebook measured best rather than the
 //! bare defaults. Two: `elastic:5cm`, the 5 cm recipe
-//! (`configs/elastic-5cm-levels.toml`: a terrain level per world from rigid
-//! ground to 5 cm tiles with mirror augmentation, then 5 cm tiles; the
-//! policy observes the goals' line ahead), and the paper's T_v2,
-//! `varying:2m:2,3,4,5cm,rigid` (`configs/tv2-levels.toml`: the 5 cm
-//! recipe's first 460 iterations, then the passages between rigid ground
-//! and deep tiles). An experiment file whose `[terrain]` names the same spec
+//! (`configs/elastic-5cm-margin.toml`: a terrain level per world from rigid
+//! ground to 5 cm tiles with mirror augmentation, then 5 cm tiles with a
+//! training pitch limit below the paper's; the policy observes the goals'
+//! line ahead), and the paper's T_v2, `varying:2m:2,3,4,5cm,rigid`
+//! (`configs/tv2-levels.toml`: the first 460 iterations of the 5 cm recipe
+//! before it, `configs/elastic-5cm-levels.toml`, then the passages between
+//! rigid ground and deep tiles). An experiment file whose `[terrain]` names the same spec
 //! trains without it.
 
 use anyhow::{Context, Result};
@@ -32,8 +33,8 @@ pub struct Recipe {
 pub const RECIPES: [Recipe; 2] = [
     Recipe {
         terrain: "elastic:5cm",
-        path: "configs/elastic-5cm-levels.toml",
-        toml: include_str!("../../configs/elastic-5cm-levels.toml"),
+        path: "configs/elastic-5cm-margin.toml",
+        toml: include_str!("../../configs/elastic-5cm-margin.toml"),
     },
     Recipe {
         terrain: "varying:2m:2cm,3cm,4cm,5cm,rigid",
@@ -124,12 +125,21 @@ mod tests {
         assert!(
             RECIPES[0]
                 .describe(&five)
-                .contains("levels rigid..elastic:5cm x280 -> elastic:5cm x220 (500 iterations)"),
+                .contains("levels rigid..elastic:5cm x280 -> elastic:5cm x140 (420 iterations)"),
             "{}",
             RECIPES[0].describe(&five)
         );
-        // T_v2's recipe is the 5 cm recipe's first 460 iterations, stage
-        // for stage, so that either forks into the other at 460
+        // the 5 cm recipe before this one (policies/elastic-5cm's): this one
+        // shares its levels (a checkpoint at 280 forks into either), the T_v2
+        // recipe its first 460 iterations, stage for stage
+        let before = Experiment::from_toml(
+            include_str!("../../configs/elastic-5cm-levels.toml"),
+            "configs/elastic-5cm-levels.toml",
+            &registry,
+        )
+        .unwrap();
+        assert_eq!(five.differs_before(&before, 280), None);
+        assert!(five.differs_before(&before, 281).is_some());
         let tv2 = RECIPES[1].experiment(&registry).unwrap();
         assert!(
             RECIPES[1].describe(&tv2).contains(
@@ -143,8 +153,8 @@ mod tests {
             "varying:2m:4cm,5cm,rigid",
             "T_v2's recipe ends on T_v2's hardest passages"
         );
-        assert_eq!(tv2.differs_before(&five, 460), None);
-        assert!(tv2.differs_before(&five, 461).is_some());
+        assert_eq!(tv2.differs_before(&before, 460), None);
+        assert!(tv2.differs_before(&before, 461).is_some());
         let rigid = Experiment::for_terrain(registry.parse("rigid").unwrap());
         assert!(recipe_for(&rigid).is_none());
     }

@@ -1,6 +1,7 @@
 """The shipped policies as ONNX graphs (`quadwalk onnx`): onnxruntime gives
 the actions quadwalk gives, on 1,000 observations recorded from the shipped
-policies' own episodes (about an equal share from each) and on values far outside them."""
+policies' own episodes (the same number from each in turn, the last one's
+share cut to reach 1,000) and on values far outside them."""
 
 import subprocess
 
@@ -12,7 +13,17 @@ import quadwalk
 onnx = pytest.importorskip("onnx", reason="the ONNX tests need onnx (pytest_suite.rs installs it)")
 ort = pytest.importorskip("onnxruntime", reason="the ONNX tests need onnxruntime (pytest_suite.rs installs it)")
 
-SHIPPED = ["rigid", "elastic-5cm", "elastic-5cm-line", "tv2", "tv2-levels", "tv8", "tc2", "tc5"]
+SHIPPED = [
+    "rigid",
+    "elastic-5cm-margin",
+    "elastic-5cm",
+    "elastic-5cm-line",
+    "tv2",
+    "tv2-levels",
+    "tv8",
+    "tc2",
+    "tc5",
+]
 
 
 def own_observations(policy, worlds: int = 10, phases: int = 17, seed: int = 2_000_000):

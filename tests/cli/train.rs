@@ -1379,7 +1379,7 @@ fn train_built_in_recipe(terrain: &str, name: &str, too_many: &str) -> (String, 
 fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
     let (stderr, config, err) = train_built_in_recipe("elastic:5cm", "recipe", "100000");
     assert!(
-        stderr.contains("elastic:5cm: quadwalk's recipe (configs/elastic-5cm-levels.toml)")
+        stderr.contains("elastic:5cm: quadwalk's recipe (configs/elastic-5cm-margin.toml)")
             && stderr.contains("training (ppo) on terrain levels rigid, elastic:5mm"),
         "{stderr}"
     );
@@ -1394,7 +1394,7 @@ fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
     );
     // more iterations than the recipe has: refused, naming its total
     assert!(
-        err.contains("--iterations 100000: the curriculum has 500 iterations"),
+        err.contains("--iterations 100000: the curriculum has 420 iterations"),
         "{err}"
     );
 }
@@ -1425,7 +1425,7 @@ fn the_tv2_terrain_trains_the_built_in_tv2_recipe() {
 }
 
 /// The README's first command trains exactly as the run that gave
-/// `policies/elastic-5cm` did: its first iterations write the shipped
+/// `policies/elastic-5cm-margin` did: its first iterations write the shipped
 /// `metrics.jsonl` lines, every value but the timings, to the last digit.
 /// A change that moves training (physics, task, learner, seeding) fails
 /// here.
@@ -1455,7 +1455,7 @@ fn the_readme_command_trains_its_first_iterations_as_the_shipped_run_did() {
     };
     let ours = std::fs::read_to_string(run.join("metrics.jsonl")).unwrap();
     let shipped = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies/elastic-5cm/metrics.jsonl"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies/elastic-5cm-margin/metrics.jsonl"),
     )
     .unwrap();
     let ours: Vec<_> = ours.lines().map(without_times).collect();

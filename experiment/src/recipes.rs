@@ -10,8 +10,8 @@
 //! line ahead), and the paper's T_v2, `varying:2m:2,3,4,5cm,rigid`
 //! (`configs/tv2-levels.toml`: the first 460 iterations of the 5 cm recipe
 //! before it, `configs/elastic-5cm-levels.toml`, then the passages between
-//! rigid ground and deep tiles). An experiment file whose `[terrain]` names the same spec
-//! trains without it.
+//! rigid ground and deep tiles). An experiment file whose `[terrain]` names
+//! the same spec trains without it.
 
 use anyhow::{Context, Result};
 use terrain_plugins::Registry;

@@ -1400,8 +1400,8 @@ fn the_5cm_terrain_trains_the_built_in_recipe_cut_by_iterations() {
 }
 
 /// `train --terrain` with T_v2, spelled as the paper's table spells it,
-/// runs the built-in T_v2 recipe: the 5 cm recipe's stages, then the
-/// passages between rigid ground and deep tiles.
+/// runs the built-in T_v2 recipe: the stages of the 5 cm recipe before
+/// the current one, then the passages between rigid ground and deep tiles.
 #[test]
 fn the_tv2_terrain_trains_the_built_in_tv2_recipe() {
     let (stderr, config, err) =

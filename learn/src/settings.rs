@@ -25,6 +25,11 @@ pub trait Settings: SettingsValue + Debug + Send + Sync {
     /// `desired_kl`): a curriculum stage may then not set one.
     fn adapts_learning_rate(&self) -> bool;
 
+    /// Environment steps per environment per iteration. Every iteration
+    /// starts fresh episodes, so no episode runs longer than this: one
+    /// still running when the iteration ends is cut there.
+    fn steps_per_env(&self) -> usize;
+
     /// A fresh learner for `obs_size` observations (and `privileged_size`
     /// values after them that only a critic may see,
     /// [`crate::VecEnv::policy_observation_size`]) and `action_size`

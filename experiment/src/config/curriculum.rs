@@ -181,6 +181,26 @@ impl Experiment {
         }
         Ok(())
     }
+
+    /// A world moves up a level only after an episode that ended without a
+    /// fall, that is one that ran to the task's `max_phases`. Every
+    /// iteration starts fresh episodes and cuts them after the learner's
+    /// `steps_per_env` steps, so a stage with levels whose episodes are
+    /// longer than that could never move a world up.
+    pub(super) fn check_stage_levels(&self, source: &str) -> Result<()> {
+        let steps = self.learner().steps_per_env();
+        for (k, stage) in self.curriculum.iter().enumerate() {
+            let max_phases = stage.task.as_ref().unwrap_or(&self.task).max_phases;
+            if stage.levels.is_some() && max_phases > steps {
+                bail!(
+                    "{source} [[curriculum]] stage {}: its terrain levels move a world up after an episode that reaches task.max_phases = {max_phases} without a fall, but every iteration starts fresh episodes and [{}] steps_per_env = {steps} cuts them before that, so no world could move up; set steps_per_env to at least max_phases, or max_phases to at most steps_per_env",
+                    k + 1,
+                    self.algo.table
+                );
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The one `[curriculum.task.observation]` key a stage may set: the

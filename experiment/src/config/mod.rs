@@ -259,6 +259,7 @@ impl Experiment {
         };
         experiment.check_stage_rates(&format!("config {source}"))?;
         experiment.check_stage_critics(&format!("config {source}"))?;
+        experiment.check_stage_levels(&format!("config {source}"))?;
         if experiment.residual.is_some() && experiment.curriculum.iter().any(|s| s.levels.is_some())
         {
             bail!(
@@ -276,7 +277,8 @@ impl Experiment {
             .resolve(algo)
             .map_err(|e| anyhow!("--algo {}: {e}", algo.name))?;
         self.algo = algo;
-        self.check_stage_rates(&format!("--algo {}", algo.name))
+        self.check_stage_rates(&format!("--algo {}", algo.name))?;
+        self.check_stage_levels(&format!("--algo {}", algo.name))
     }
 
     /// The learner's settings.
@@ -778,6 +780,57 @@ mod tests {
             .to_string();
         assert!(
             err.contains("c.toml: privileged_critic") && err.contains("[residual]"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn terrain_levels_need_episodes_that_end_within_an_iteration() {
+        let levels = "[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n[[curriculum]]\niterations = 3\n[curriculum.levels]\nterrains = [\"rigid\", \"elastic:1cm\"]\n";
+        // 40-phase episodes in 40-step iterations: the recipes' layout
+        Experiment::from_toml_builtin(levels, "l.toml").unwrap();
+        // 20-step iterations cut every 40-phase episode: no world could move up
+        let short = format!("{levels}[ppo]\nsteps_per_env = 20\n");
+        let err = format!(
+            "{:#}",
+            Experiment::from_toml_builtin(&short, "l.toml").unwrap_err()
+        );
+        assert!(
+            err.contains("l.toml [[curriculum]] stage 2: its terrain levels move a world up after an episode that reaches task.max_phases = 40 without a fall")
+                && err.contains("[ppo] steps_per_env = 20 cuts them"),
+            "{err}"
+        );
+        // shorter episodes fit, and a stage without levels is not concerned
+        Experiment::from_toml_builtin(&format!("{short}[task]\nmax_phases = 20\n"), "l.toml")
+            .unwrap();
+        Experiment::from_toml_builtin(
+            "[terrain]\nspec = \"rigid\"\n[ppo]\nsteps_per_env = 20\n",
+            "r.toml",
+        )
+        .unwrap();
+        // a stage's own max_phases counts
+        let long = levels.replace(
+            "terrains = [\"rigid\", \"elastic:1cm\"]\n",
+            "terrains = [\"rigid\", \"elastic:1cm\"]\n[curriculum.task]\nmax_phases = 60\n",
+        );
+        let err = format!(
+            "{:#}",
+            Experiment::from_toml_builtin(&long, "l.toml").unwrap_err()
+        );
+        assert!(err.contains("task.max_phases = 60"), "{err}");
+        // switching the learner checks its steps
+        let mut e = Experiment::from_toml_builtin(
+            &format!("{levels}[sac]\nsteps_per_env = 10\n"),
+            "l.toml",
+        )
+        .unwrap();
+        let err = format!(
+            "{:#}",
+            e.set_algo(registry::find("sac").unwrap()).unwrap_err()
+        );
+        assert!(
+            err.contains("--algo sac [[curriculum]] stage 2")
+                && err.contains("[sac] steps_per_env = 10"),
             "{err}"
         );
     }

@@ -68,6 +68,10 @@ impl Settings for PpoConfig {
         self.desired_kl.is_some()
     }
 
+    fn steps_per_env(&self) -> usize {
+        self.steps_per_env
+    }
+
     fn build(
         &self,
         obs_size: (usize, usize),

@@ -101,6 +101,10 @@ impl Settings for SacConfig {
         false
     }
 
+    fn steps_per_env(&self) -> usize {
+        self.steps_per_env
+    }
+
     fn build(
         &self,
         (obs_size, privileged_size): (usize, usize),

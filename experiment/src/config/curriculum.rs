@@ -157,7 +157,13 @@ impl Experiment {
             return &self.task;
         }
         let (stage, _) = self.terrain_at(iteration);
-        self.curriculum[stage].task.as_ref().unwrap_or(&self.task)
+        self.task_of(&self.curriculum[stage])
+    }
+
+    /// A stage's task: its own where it sets `[curriculum.task]` keys, else
+    /// `[task]`.
+    pub(super) fn task_of<'a>(&'a self, stage: &'a Stage) -> &'a TaskConfig {
+        stage.task.as_ref().unwrap_or(&self.task)
     }
 
     /// The learning rate iteration `iteration` trains at: the stage's, else
@@ -190,7 +196,7 @@ impl Experiment {
     pub(super) fn check_stage_levels(&self, source: &str) -> Result<()> {
         let steps = self.learner().steps_per_env();
         for (k, stage) in self.curriculum.iter().enumerate() {
-            let max_phases = stage.task.as_ref().unwrap_or(&self.task).max_phases;
+            let max_phases = self.task_of(stage).max_phases;
             if stage.levels.is_some() && max_phases > steps {
                 bail!(
                     "{source} [[curriculum]] stage {}: its terrain levels move a world up after an episode that reaches task.max_phases = {max_phases} without a fall, but every iteration starts fresh episodes and [{}] steps_per_env = {steps} cuts them before that, so no world could move up; set steps_per_env to at least max_phases, or max_phases to at most steps_per_env",
@@ -252,14 +258,7 @@ impl Experiment {
     /// on, every later stage keeps it on. A residual's critic sees the
     /// residual's own observation, so `[residual]` refuses it.
     pub(super) fn check_stage_critics(&self, source: &str) -> Result<()> {
-        let privileged = |stage: &Stage| {
-            stage
-                .task
-                .as_ref()
-                .unwrap_or(&self.task)
-                .observation
-                .privileged_critic
-        };
+        let privileged = |stage: &Stage| self.task_of(stage).observation.privileged_critic;
         if self.residual.is_some()
             && (self.task.observation.privileged_critic || self.curriculum.iter().any(privileged))
         {

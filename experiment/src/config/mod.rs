@@ -1159,7 +1159,7 @@ mod tests {
             e.curriculum
                 .iter()
                 .map(|s| {
-                    let task = s.task.as_ref().unwrap_or(&e.task);
+                    let task = e.task_of(s);
                     (
                         s.terrain.to_string(),
                         s.iterations,
@@ -1254,10 +1254,7 @@ mod tests {
                 (Some((0.3, 2.3)), (-0.1, 0.1), 1.0),
                 "stage {k}"
             );
-            let plain = deepening.curriculum[k]
-                .task
-                .as_ref()
-                .unwrap_or(&deepening.task);
+            let plain = deepening.task_of(&deepening.curriculum[k]);
             assert_eq!(
                 TaskConfig {
                     first_goal_ahead_range_m: None,

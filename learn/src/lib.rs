@@ -17,6 +17,7 @@
 //! | [`env`] | the `VecEnv` trait and its buffer shapes |
 //! | [`episodes`] | episode statistics of a collection, for every algorithm |
 //! | [`mlp`] | the multilayer perceptron and normal draws |
+//! | [`tanh`] | the networks' activation: libm's or quadwalk's polynomial |
 //! | [`normalizer`] | running observation normalisation |
 //! | [`optim`] | Adam with exposed moments, gradient-norm clipping |
 //! | [`seeds`] | per-iteration seeds and generator positions |
@@ -39,6 +40,7 @@ pub mod registry;
 pub mod sac;
 pub mod seeds;
 pub mod settings;
+pub mod tanh;
 pub mod toy;
 
 pub use algorithm::{Algorithm, Figure, IterationStats};

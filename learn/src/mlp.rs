@@ -6,6 +6,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::LearnError;
+use crate::tanh::TanhImpl;
 
 /// `t` (`rows x cols`) with `extra` rows of zeros below: a layer's weight,
 /// or its optimiser moments, given `extra` more inputs that it ignores.
@@ -28,6 +29,8 @@ pub struct Dense {
 pub struct Mlp {
     /// the layers, input first
     pub layers: Vec<Dense>,
+    /// which tanh runs between the layers
+    pub tanh: TanhImpl,
 }
 
 impl Mlp {
@@ -57,7 +60,15 @@ impl Mlp {
                 bias: Var::from_tensor(&Tensor::zeros(fan_out, DType::F32, device)?)?,
             });
         }
-        Ok(Self { layers })
+        Ok(Self {
+            layers,
+            tanh: TanhImpl::Libm,
+        })
+    }
+
+    /// The same network evaluating `tanh` between its layers.
+    pub fn with_tanh(self, tanh: TanhImpl) -> Self {
+        Self { tanh, ..self }
     }
 
     /// `x`: `B x in` -> `B x out`.
@@ -68,7 +79,7 @@ impl Mlp {
                 .matmul(layer.weight.as_tensor())?
                 .broadcast_add(layer.bias.as_tensor())?;
             if k + 1 < self.layers.len() {
-                h = h.tanh()?;
+                h = self.tanh.apply(&h)?;
             }
         }
         Ok(h)

@@ -12,6 +12,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::LearnError;
 use crate::mlp::{Mlp, standard_normal, with_zero_rows};
+use crate::tanh::TanhImpl;
 
 /// ln(2 pi)
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
@@ -62,6 +63,15 @@ impl ActorCritic {
             action_size,
             device,
         })
+    }
+
+    /// The same networks evaluating `tanh` between their layers.
+    pub fn with_tanh(self, tanh: TanhImpl) -> Self {
+        Self {
+            actor: self.actor.with_tanh(tanh),
+            critic: self.critic.with_tanh(tanh),
+            ..self
+        }
     }
 
     /// The same networks with the critic also taking `extra` privileged

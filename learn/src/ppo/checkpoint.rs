@@ -178,6 +178,7 @@ mod tests {
 
     use super::*;
     use crate::checkpoint::{point_latest, remove_partial_saves, write_dir_atomically};
+    use crate::tanh::TanhImpl;
 
     fn trainer() -> Trainer {
         let config = PpoConfig {
@@ -219,6 +220,30 @@ mod tests {
                 .adam
                 .learning_rate,
             2e-4
+        );
+    }
+
+    #[test]
+    fn the_polynomial_tanh_survives_a_resume_and_the_default_is_not_written() {
+        let tmp = tempfile::tempdir().unwrap();
+        let libm = trainer();
+        save(&libm, &tmp.path().join("libm"));
+        let text = fs::read_to_string(tmp.path().join("libm").join(STATE_FILE)).unwrap();
+        assert!(!text.contains("tanh"), "{text}");
+        let mut t = trainer();
+        t.config.tanh = TanhImpl::Polynomial;
+        t.policy = t.policy.clone().with_tanh(TanhImpl::Polynomial);
+        save(&t, &tmp.path().join("poly"));
+        let text = fs::read_to_string(tmp.path().join("poly").join(STATE_FILE)).unwrap();
+        assert!(text.contains("tanh = \"polynomial\""), "{text}");
+        let back = Trainer::load(&tmp.path().join("poly")).unwrap();
+        assert_eq!(back.config.tanh, TanhImpl::Polynomial);
+        assert_eq!(back.policy.actor.tanh, TanhImpl::Polynomial);
+        assert_eq!(back.policy.critic.tanh, TanhImpl::Polynomial);
+        let obs = [0.3, -1.2, 0.7, 2.0, -0.4];
+        assert_eq!(
+            back.act_deterministic(&obs).unwrap(),
+            t.act_deterministic(&obs).unwrap()
         );
     }
 

@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::LearnError;
+use crate::tanh::TanhImpl;
 
 /// PPO hyper-parameters (the `[ppo]` table of an experiment file).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -13,6 +14,12 @@ use crate::LearnError;
 pub struct PpoConfig {
     /// hidden layer widths of both the actor and the critic (tanh between layers)
     pub hidden_sizes: Vec<usize>,
+    /// which tanh the networks evaluate: `"libm"` (the platform's C
+    /// library, the default) or `"polynomial"` (quadwalk's own, the same
+    /// function to within an ulp at a third of the cost; a run with it is a
+    /// new run: [`crate::tanh`])
+    #[serde(skip_serializing_if = "TanhImpl::is_libm")]
+    pub tanh: TanhImpl,
     /// Adam step size
     pub learning_rate: f64,
     /// discount
@@ -68,6 +75,7 @@ impl Default for PpoConfig {
     fn default() -> Self {
         Self {
             hidden_sizes: vec![256, 128],
+            tanh: TanhImpl::Libm,
             learning_rate: 2e-4,
             gamma: 0.95,
             gae_lambda: 0.95,

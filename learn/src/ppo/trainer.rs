@@ -154,7 +154,8 @@ impl Trainer {
             &config.hidden_sizes,
             config.init_log_std,
             &mut rng,
-        )?;
+        )?
+        .with_tanh(config.tanh);
         let adam = Adam::new(policy.named_vars(), config.learning_rate)?;
         let normalizer = ObsNormalizer::new(obs_size + privileged_size, config.obs_clip);
         Ok(Self {

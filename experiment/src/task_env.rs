@@ -24,14 +24,24 @@ use crate::scene::make_world;
 
 /// Per-episode metrics, in the order of `episode_metrics`: the distance
 /// and the goals, then per [`Termination::KINDS`] 1 when the episode ended
-/// so (`fell_<kind>`), else 0.
-pub const EPISODE_METRICS: [&str; 5] = [
+/// so (`fell_<kind>`), else 0. A task without a stall rule reports all but
+/// the last ([`episode_metrics_of`]).
+pub const EPISODE_METRICS: [&str; 6] = [
     "distance_m",
     "goals_reached",
     "fell_base_too_low",
     "fell_pitch_too_large",
     "fell_non_foot_contact",
+    "fell_stalled",
 ];
+
+/// The [`EPISODE_METRICS`] an environment with `task` reports: `fell_stalled`
+/// only where the task has a stall rule, so that the metrics of runs without
+/// one keep their keys.
+pub fn episode_metrics_of(task: &TaskConfig) -> &'static [&'static str] {
+    let count = EPISODE_METRICS.len() - usize::from(task.stall.is_none());
+    &EPISODE_METRICS[..count]
+}
 
 /// A logger on one environment, timing what it costs.
 pub struct EnvLogger {
@@ -340,7 +350,10 @@ impl VecEnv for TaskEnv {
     }
 
     fn episode_metric_names(&self) -> Vec<String> {
-        EPISODE_METRICS.iter().map(ToString::to_string).collect()
+        episode_metrics_of(&self.task_config)
+            .iter()
+            .map(ToString::to_string)
+            .collect()
     }
 
     fn reset_all(&mut self, seed: u64, obs: &mut [f32]) {
@@ -396,7 +409,7 @@ impl VecEnv for TaskEnv {
     fn step(&mut self, actions: &[f32], out: &mut StepResult) {
         let (o, width) = (self.obs_size, self.observation_size());
         let t = RewardTerms::NAMES.len();
-        let m = EPISODE_METRICS.len();
+        let m = episode_metrics_of(&self.task_config).len();
         if self.interrupted.load(Ordering::Relaxed) {
             out.rewards.fill(0.0);
             out.truncated.fill(true);
@@ -408,6 +421,7 @@ impl VecEnv for TaskEnv {
         }
         if let Some(residual) = &mut self.residual {
             step_residual(
+                m,
                 &self.pool,
                 &mut self.tasks,
                 &mut self.loggers,
@@ -493,8 +507,9 @@ impl VecEnv for TaskEnv {
     }
 }
 
-/// An ended episode's [`EPISODE_METRICS`]: the distance along x from its
-/// start, m, the goals reached, and which termination (if any) ended it.
+/// An ended episode's [`EPISODE_METRICS`] (as many as `metrics` holds):
+/// the distance along x from its start, m, the goals reached, and which
+/// termination (if any) ended it.
 fn write_episode_metrics(task: &Task, termination: Option<&Termination>, metrics: &mut [f32]) {
     let base_x_m = task.world().base_pose().translation.vector.x;
     metrics[0] = (base_x_m - task.start_xy_m()[0]) as f32;
@@ -537,8 +552,10 @@ fn begin_residual_phase(
         .expect("the phase policy acts on its own observation");
 }
 
-/// One control step of every residual task (see [`crate::residual`]).
+/// One control step of every residual task (see [`crate::residual`]), `m`
+/// episode metrics a task.
 fn step_residual(
+    m: usize,
     pool: &rayon::ThreadPool,
     tasks: &mut [Task],
     loggers: &mut [Option<EnvLogger>],
@@ -546,7 +563,6 @@ fn step_residual(
     actions: &[f32],
     out: &mut StepResult,
 ) {
-    let m = EPISODE_METRICS.len();
     let t = RESIDUAL_REWARD_TERMS.len();
     let Residual { drivers, phase_obs } = residual;
     let StepResult {
@@ -657,12 +673,12 @@ mod tests {
         )
         .unwrap();
         let out = one_phase_of_zero_actions(&mut env, 3);
-        let m = EPISODE_METRICS.len();
-        assert_eq!(env.episode_metric_names(), EPISODE_METRICS);
-        EPISODE_METRICS
-            .iter()
-            .zip(&out.episode_metrics[..m])
-            .map(|(name, v)| (name.to_string(), *v))
+        let names = env.episode_metric_names();
+        assert_eq!(names, episode_metrics_of(&experiment.task));
+        let m = names.len();
+        names
+            .into_iter()
+            .zip(out.episode_metrics[..m].to_vec())
             .collect()
     }
 
@@ -681,6 +697,11 @@ mod tests {
         // a minimum base height above the standing base ends it by height
         let low = first_episode_metrics("min_base_height_m = 0.6\n");
         assert_eq!(fell(&low), [1.0, 0.0, 0.0], "{low:?}");
+        // a phase of standing makes no ground: a one-phase stall window
+        // ends it, and only then is fell_stalled reported
+        let stalled = first_episode_metrics("stall = { phases = 1, new_ground_m = 0.05 }\n");
+        assert_eq!(fell(&stalled), [0.0, 0.0, 0.0, 1.0], "{stalled:?}");
+        assert_eq!(stalled.last().unwrap().0, "fell_stalled");
         for kind in Termination::KINDS {
             assert!(EPISODE_METRICS.contains(&format!("fell_{kind}").as_str()));
         }

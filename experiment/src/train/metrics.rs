@@ -31,16 +31,17 @@ pub fn curves(stats: &IterationStats) -> Vec<(String, f64)> {
         .collect()
 }
 
-/// The share of the iteration's ended episodes that each termination ended
-/// (`robot::task::Termination::KINDS`), null where no episode ended.
+/// The share of the iteration's ended episodes that each termination the
+/// environment reports ended (`robot::task::Termination::KINDS`, `stalled`
+/// only under a stall rule), null where no episode ended.
 fn falls_by_cause(stats: &IterationStats) -> serde_json::Value {
     robot::task::Termination::KINDS
         .iter()
-        .map(|kind| {
-            (
-                kind.to_string(),
-                json!(stats.episode_metric(&format!("fell_{kind}"))),
-            )
+        .map(|kind| format!("fell_{kind}"))
+        .filter(|name| stats.episodes.metrics.iter().any(|(n, _)| n == name))
+        .map(|name| {
+            let share = stats.episode_metric(&name);
+            (name["fell_".len()..].to_string(), json!(share))
         })
         .collect::<serde_json::Map<_, _>>()
         .into()

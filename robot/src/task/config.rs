@@ -33,6 +33,9 @@
 //!                                # points count from its height at the phase start;
 //!                                # "touchdown": from its height when it last landed
 //!                                # (a foot sunk in soil lifts out of its hole)
+//! stall = { phases = 10, new_ground_m = 0.05 } # optional: the episode ends (paid
+//!                                # termination_reward) once its last 10 phases made
+//!                                # less than 5 cm of new ground toward the goals
 //!
 //! [task.observation]      # the paper's ablations
 //! foot_history = false    # drop the three previous phase-start foot positions (-36)
@@ -308,6 +311,22 @@ impl SwingHeightReference {
     }
 }
 
+/// A termination for episodes that stop making ground: the episode ends
+/// when its last `phases` phases made less than `new_ground_m` of new ground
+/// toward the goals (the closest approach to the goal shortened, as
+/// [`DistanceReward::NewGround`] measures it before its pace cap). Standing
+/// still then ends an episode as a fall does, so that under a
+/// `termination_reward` that a clumsy gait often pays, standing is no
+/// safer than walking.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StallRule {
+    /// the window, phases (1 to `max_phases`)
+    pub phases: usize,
+    /// the new ground the window must make, m
+    pub new_ground_m: f64,
+}
+
 /// Settings of the task (the `[task]` table; fields in the order an
 /// experiment file lists them).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -348,6 +367,10 @@ pub struct TaskConfig {
     pub base_height_reference: BaseHeightReference,
     /// the reward of a terminated phase
     pub termination_reward: f64,
+    /// termination: an episode that stops making ground ends (`None`, the
+    /// paper's: never)
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stall: Option<StallRule>,
     /// after a reset the robot stands this long holding the squat, so that
     /// it starts loaded on the ground (tiles sunk), s
     pub settle_secs: f64,
@@ -431,6 +454,23 @@ impl TaskConfig {
                 self.settle_secs
             ));
         }
+        if let Some(StallRule {
+            phases,
+            new_ground_m,
+        }) = self.stall
+        {
+            if phases == 0 || phases > self.max_phases {
+                return fail(format!(
+                    "stall.phases must be 1 to max_phases ({}), got {phases}",
+                    self.max_phases
+                ));
+            }
+            if !(new_ground_m.is_finite() && new_ground_m > 0.0) {
+                return fail(format!(
+                    "stall.new_ground_m must be a positive number (m in stall.phases phases), got {new_ground_m}"
+                ));
+            }
+        }
         let per_m = self.forward_reward_per_m;
         if !(per_m.is_finite() && (0.0..=1e4).contains(&per_m)) {
             return fail(format!(
@@ -500,6 +540,7 @@ impl Default for TaskConfig {
             pitch_reference: PitchReference::default(),
             base_height_reference: BaseHeightReference::default(),
             termination_reward: -10.0,
+            stall: None,
             observation: ObservationConfig::default(),
             settle_secs: 0.5,
             distance_reward: DistanceReward::default(),
@@ -634,6 +675,10 @@ mod tests {
             pitch_reference: PitchReference::Ground,
             base_height_reference: BaseHeightReference::Feet,
             swing_height_reference: SwingHeightReference::Touchdown,
+            stall: Some(StallRule {
+                phases: 10,
+                new_ground_m: 0.05,
+            }),
             observation: ObservationConfig {
                 foot_history_phases: 2,
                 goal_line_ahead_m: Some(1.0),
@@ -655,6 +700,7 @@ mod tests {
             "pitch_reference",
             "base_height_reference",
             "swing_height_reference",
+            "stall",
         ] {
             assert!(!plain.contains(key), "{key} in {plain}");
         }
@@ -713,6 +759,19 @@ mod tests {
             (
                 "orientation_lookahead_m = 1.0\n[observation]\ngoal_line_ahead_m = 1.0",
                 "both set R_o's heading target",
+            ),
+            (
+                "stall = { phases = 41, new_ground_m = 0.05 }",
+                "stall.phases must be 1 to max_phases (40), got 41",
+            ),
+            (
+                "stall = { phases = 10, new_ground_m = 0.0 }",
+                "stall.new_ground_m must be a positive number",
+            ),
+            ("stall = { phases = 10 }", "missing field `new_ground_m`"),
+            (
+                "stall = { phases = 10, new_ground_m = 0.05, pace = 1 }",
+                "unknown field `pace`",
             ),
         ] {
             let err = from_toml(text).unwrap_err();

@@ -119,7 +119,7 @@ mod reward;
 mod termination;
 
 pub use config::{
-    ActionPrior, BalanceTerms, BaseHeightReference, DistanceReward, PitchReference,
+    ActionPrior, BalanceTerms, BaseHeightReference, DistanceReward, PitchReference, StallRule,
     SwingHeightReference, TaskConfig, TaskConfigError,
 };
 pub use mirror::{MirrorError, TaskMirror, mirror_action};
@@ -178,6 +178,9 @@ struct Episode {
     goals_reached: usize,
     /// the closest the base came to the current goal in this episode, m
     closest_goal_distance_m: f64,
+    /// the new ground made toward the goals by the end of each phase so
+    /// far, from 0 at the start, m (kept only under a [`StallRule`])
+    new_ground_by_phase_m: Vec<f64>,
     done: bool,
 }
 
@@ -211,6 +214,7 @@ impl Task {
                 goal_xy_m: [0.0; 2],
                 goals_reached: 0,
                 closest_goal_distance_m: 0.0,
+                new_ground_by_phase_m: Vec::new(),
                 done: true,
             },
         }
@@ -352,6 +356,7 @@ impl Task {
             ],
             goals_reached: 0,
             closest_goal_distance_m: 0.0,
+            new_ground_by_phase_m: vec![0.0],
             done: false,
         };
         self.episode.closest_goal_distance_m = self.goal_in_base().norm();

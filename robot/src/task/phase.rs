@@ -172,6 +172,14 @@ impl Task {
         self.controller.end_phase(&plan);
 
         let mean_base_height_m = height_sum / steps as f64;
+        let mut termination = termination;
+        if termination.is_none() {
+            // the new ground the phase made toward the goal (before a goal
+            // reached moves it on)
+            let new_ground_m =
+                (self.episode.closest_goal_distance_m - self.goal_in_base().norm()).max(0.0);
+            termination = self.check_stall(new_ground_m);
+        }
         let (reward, terms, goals_reached) = if termination.is_some() {
             (self.config.termination_reward, RewardTerms::default(), 0)
         } else {

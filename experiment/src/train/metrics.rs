@@ -37,11 +37,10 @@ pub fn curves(stats: &IterationStats) -> Vec<(String, f64)> {
 fn falls_by_cause(stats: &IterationStats) -> serde_json::Value {
     robot::task::Termination::KINDS
         .iter()
-        .map(|kind| format!("fell_{kind}"))
-        .filter(|name| stats.episodes.metrics.iter().any(|(n, _)| n == name))
-        .map(|name| {
-            let share = stats.episode_metric(&name);
-            (name["fell_".len()..].to_string(), json!(share))
+        .filter_map(|kind| {
+            let name = format!("fell_{kind}");
+            let (_, share) = stats.episodes.metrics.iter().find(|(n, _)| *n == name)?;
+            Some((kind.to_string(), json!(share)))
         })
         .collect::<serde_json::Map<_, _>>()
         .into()

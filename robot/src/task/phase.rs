@@ -161,7 +161,7 @@ impl Task {
         let PhaseRun {
             plan,
             steps,
-            termination,
+            mut termination,
             goal_distance_prev_m: goal_distance_prev,
             torque_norm_sum,
             height_sum_m: height_sum,
@@ -172,37 +172,35 @@ impl Task {
         self.controller.end_phase(&plan);
 
         let mean_base_height_m = height_sum / steps as f64;
-        let mut termination = termination;
+        // |rho|, to the goal of the phase (before a goal reached moves it on)
+        let goal_distance = self.goal_in_base().norm();
         if termination.is_none() {
-            // the new ground the phase made toward the goal (before a goal
-            // reached moves it on)
-            let new_ground_m =
-                (self.episode.closest_goal_distance_m - self.goal_in_base().norm()).max(0.0);
+            // the new ground the phase made toward the goal
+            let new_ground_m = (self.episode.closest_goal_distance_m - goal_distance).max(0.0);
             termination = self.check_stall(new_ground_m);
         }
         let (reward, terms, goals_reached) = if termination.is_some() {
             (self.config.termination_reward, RewardTerms::default(), 0)
         } else {
-            let rho = self.goal_in_base();
             let (roll, _, _) = self.world.base_pose().rotation.euler_angles();
             let terms = RewardTerms {
                 distance: match self.config.distance_reward {
                     DistanceReward::Progress => {
-                        RewardTerms::distance_term(goal_distance_prev, rho.norm())
+                        RewardTerms::distance_term(goal_distance_prev, goal_distance)
                     }
                     DistanceReward::NewGround => RewardTerms::new_ground_term(
                         self.episode.closest_goal_distance_m,
                         goal_distance_prev,
-                        rho.norm(),
+                        goal_distance,
                         self.config.max_paid_progress_m.unwrap_or(f64::INFINITY),
                     ),
                     DistanceReward::Forward => RewardTerms::forward_term(
                         goal_distance_prev,
-                        rho.norm(),
+                        goal_distance,
                         self.config.forward_reward_per_m,
                     ),
                     DistanceReward::Tracking => RewardTerms::tracking_term(
-                        goal_distance_prev - rho.norm(),
+                        goal_distance_prev - goal_distance,
                         self.config.target_progress_m,
                     ),
                 },

@@ -14,6 +14,8 @@
 //! target_progress_m = 0.025      # the pace per phase "tracking" pays most for
 //! max_paid_progress_m = 0.04     # optional: "new_ground" pays at most this much
 //!                                # new ground per phase (a pace cap), m
+//! new_ground_reward_per_m = 20.0 # optional: "new_ground" pays this per metre of
+//!                                # new ground (default 10, the paper's alpha_d)
 //! orientation_lookahead_m = 1.0  # optional: R_o heads for the first goal at least
 //!                                # this far away (default 0: the current goal, the paper's)
 //! balance_terms = "penalty"      # R_o, R_s, R_t, R_r shifted by their best value
@@ -385,6 +387,11 @@ pub struct TaskConfig {
     /// earns nothing and only risks a fall
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_paid_progress_m: Option<f64>,
+    /// [`DistanceReward::NewGround`]'s pay per metre of new ground
+    /// (`None`: [`DEFAULT_NEW_GROUND_REWARD_PER_M`], the paper's alpha_d for
+    /// an approach); what a step back costs stays 1 per metre
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub new_ground_reward_per_m: Option<f64>,
     /// R_o judges the heading by the azimuth of the first goal on the line
     /// (the current one, then those `goal_spacing_m` apart beyond it) at
     /// least this far from the base, m; 0 (the paper's): the current goal,
@@ -403,7 +410,17 @@ pub struct TaskConfig {
     pub observation: ObservationConfig,
 }
 
+/// [`TaskConfig::new_ground_reward_per_m`] when the file does not set it:
+/// the paper's alpha_d for an approach (R_d pays 10 per metre closer).
+pub const DEFAULT_NEW_GROUND_REWARD_PER_M: f64 = 10.0;
+
 impl TaskConfig {
+    /// What [`DistanceReward::NewGround`] pays per metre of new ground.
+    pub fn new_ground_paid_per_m(&self) -> f64 {
+        self.new_ground_reward_per_m
+            .unwrap_or(DEFAULT_NEW_GROUND_REWARD_PER_M)
+    }
+
     /// Number of observation values: the switched-on blocks and the prior's.
     pub fn observation_size(&self) -> usize {
         self.observation.size() + self.action_prior.observation_size()
@@ -490,6 +507,19 @@ impl TaskConfig {
                 ));
             }
         }
+        if let Some(per_m) = self.new_ground_reward_per_m {
+            if !(per_m.is_finite() && per_m > 0.0 && per_m <= 1e4) {
+                return fail(format!(
+                    "new_ground_reward_per_m must be in (0, 10000] (reward per metre), got {per_m}"
+                ));
+            }
+            if self.distance_reward != DistanceReward::NewGround {
+                return fail(format!(
+                    "new_ground_reward_per_m weighs distance_reward = \"new_ground\" only, but distance_reward = {:?}",
+                    self.distance_reward.name()
+                ));
+            }
+        }
         let lookahead_m = self.orientation_lookahead_m;
         if !(lookahead_m.is_finite() && (0.0..=100.0).contains(&lookahead_m)) {
             return fail(format!(
@@ -547,6 +577,7 @@ impl Default for TaskConfig {
             forward_reward_per_m: 40.0,
             target_progress_m: 0.025,
             max_paid_progress_m: None,
+            new_ground_reward_per_m: None,
             orientation_lookahead_m: 0.0,
             balance_terms: BalanceTerms::default(),
             action_prior: ActionPrior::default(),
@@ -669,6 +700,7 @@ mod tests {
         let task = TaskConfig {
             first_goal_ahead_range_m: Some((0.3, 2.3)),
             max_paid_progress_m: Some(0.03),
+            new_ground_reward_per_m: Some(20.0),
             distance_reward: DistanceReward::NewGround,
             balance_terms: BalanceTerms::Penalty,
             action_prior: ActionPrior::ScriptedCrawl,
@@ -695,6 +727,7 @@ mod tests {
         for key in [
             "first_goal_ahead_range_m",
             "max_paid_progress_m",
+            "new_ground_reward_per_m",
             "foot_history_phases",
             "goal_line_ahead_m",
             "pitch_reference",
@@ -727,6 +760,14 @@ mod tests {
             (
                 "distance_reward = \"progress\"\nmax_paid_progress_m = 0.03",
                 "max_paid_progress_m caps distance_reward = \"new_ground\" only",
+            ),
+            (
+                "distance_reward = \"new_ground\"\nnew_ground_reward_per_m = 0.0",
+                "new_ground_reward_per_m must be in (0, 10000] (reward per metre), got 0",
+            ),
+            (
+                "new_ground_reward_per_m = 20.0",
+                "new_ground_reward_per_m weighs distance_reward = \"new_ground\" only, but distance_reward = \"progress\"",
             ),
             (
                 "balance_terms = \"reward\"",

@@ -193,6 +193,7 @@ impl Task {
                         goal_distance_prev,
                         goal_distance,
                         self.config.max_paid_progress_m.unwrap_or(f64::INFINITY),
+                        self.config.new_ground_paid_per_m(),
                     ),
                     DistanceReward::Forward => RewardTerms::forward_term(
                         goal_distance_prev,
@@ -295,5 +296,41 @@ mod tests {
         let rise_m =
             moved.world().base_pose().translation.z - plain.world().base_pose().translation.z;
         assert!((0.02..0.04).contains(&rise_m), "the base rose {rise_m} m");
+    }
+
+    #[test]
+    fn new_ground_is_paid_its_weight_per_metre_and_nothing_else_changes() {
+        // The crawl's first eight phases on rigid ground paid 10 (the
+        // default) and 20 per metre of new ground: the same motion, and each
+        // phase's distance term differs by 10 x the new ground it made.
+        let paid = |per_m| TaskConfig {
+            distance_reward: DistanceReward::NewGround,
+            new_ground_reward_per_m: per_m,
+            ..TaskConfig::default()
+        };
+        let mut ten = task_on("rigid", paid(None), 3);
+        let mut twenty = task_on("rigid", paid(Some(20.0)), 3);
+        let n = ten.observation_size();
+        let (mut obs_a, mut obs_b) = (vec![0.0; n], vec![0.0; n]);
+        ten.reset(&mut obs_a);
+        twenty.reset(&mut obs_b);
+        let crawl = ScriptedCrawl::default();
+        let mut made_m = 0.0;
+        for phase in 1..=8 {
+            let action = crawl.act(&ten);
+            let closest_before_m = ten.episode.closest_goal_distance_m;
+            let a = ten.step_phase(&action, &mut obs_a);
+            let b = twenty.step_phase(&action, &mut obs_b);
+            assert_eq!(obs_a, obs_b, "phase {phase}");
+            let new_ground_m = closest_before_m - ten.episode.closest_goal_distance_m;
+            made_m += new_ground_m;
+            let extra = b.terms.distance - a.terms.distance;
+            assert!(
+                (extra - 10.0 * new_ground_m).abs() < 1e-9,
+                "phase {phase}: {extra} for {new_ground_m} m"
+            );
+            assert_eq!(a.terms.orientation, b.terms.orientation);
+        }
+        assert!(made_m > 0.05, "the crawl made {made_m} m");
     }
 }

@@ -66,21 +66,24 @@ impl RewardTerms {
     }
 
     /// [`DistanceReward::NewGround`]:
-    /// 10 min((closest_before - now)+, cap) - (now - prev)+, with
+    /// w min((closest_before - now)+, cap) - (now - prev)+, with
     /// `closest_before_m` the closest approach to the goal earlier in the
-    /// episode (at most `goal_distance_prev_m`) and `max_paid_m` the cap on
-    /// the new ground paid in one phase (`f64::INFINITY`: no cap). New
-    /// ground past the cap is covered but unpaid: a faster pace earns
-    /// nothing more.
+    /// episode (at most `goal_distance_prev_m`), `max_paid_m` the cap on
+    /// the new ground paid in one phase (`f64::INFINITY`: no cap) and
+    /// `paid_per_m` the weight w (10 in the recipes: the paper's alpha_d
+    /// for an approach). New ground past the cap is covered but unpaid: a
+    /// faster pace earns nothing more.
     pub fn new_ground_term(
         closest_before_m: f64,
         goal_distance_prev_m: f64,
         goal_distance_m: f64,
         max_paid_m: f64,
+        paid_per_m: f64,
     ) -> f64 {
-        10.0 * (closest_before_m - goal_distance_m)
-            .max(0.0)
-            .min(max_paid_m)
+        paid_per_m
+            * (closest_before_m - goal_distance_m)
+                .max(0.0)
+                .min(max_paid_m)
             - (goal_distance_m - goal_distance_prev_m).max(0.0)
     }
 
@@ -139,17 +142,29 @@ mod tests {
             .map(|&(a, b)| RewardTerms::distance_term(a, b))
             .sum();
         assert!((paper - 1.9).abs() < 1e-12);
-        assert!((RewardTerms::new_ground_term(2.0, 2.0, 1.9, f64::INFINITY) - 1.0).abs() < 1e-12);
-        assert!((RewardTerms::new_ground_term(1.9, 1.9, 2.0, f64::INFINITY) + 0.1).abs() < 1e-12);
-        assert!(RewardTerms::new_ground_term(1.9, 2.0, 1.9, f64::INFINITY).abs() < 1e-12);
-        assert!((RewardTerms::new_ground_term(1.9, 2.0, 1.8, f64::INFINITY) - 1.0).abs() < 1e-12);
+        assert!(
+            (RewardTerms::new_ground_term(2.0, 2.0, 1.9, f64::INFINITY, 10.0) - 1.0).abs() < 1e-12
+        );
+        assert!(
+            (RewardTerms::new_ground_term(1.9, 1.9, 2.0, f64::INFINITY, 10.0) + 0.1).abs() < 1e-12
+        );
+        assert!(RewardTerms::new_ground_term(1.9, 2.0, 1.9, f64::INFINITY, 10.0).abs() < 1e-12);
+        assert!(
+            (RewardTerms::new_ground_term(1.9, 2.0, 1.8, f64::INFINITY, 10.0) - 1.0).abs() < 1e-12
+        );
         // half of a forward step is new ground: 10 x 0.05 (no loss)
-        assert!((RewardTerms::new_ground_term(1.85, 1.9, 1.8, f64::INFINITY) - 0.5).abs() < 1e-12);
+        assert!(
+            (RewardTerms::new_ground_term(1.85, 1.9, 1.8, f64::INFINITY, 10.0) - 0.5).abs() < 1e-12
+        );
         // a cap of 4 cm per phase: a 10 cm step pays 10 x 0.04, a 3 cm step
         // its full 10 x 0.03, and a step back costs what it did
-        assert!((RewardTerms::new_ground_term(2.0, 2.0, 1.9, 0.04) - 0.4).abs() < 1e-12);
-        assert!((RewardTerms::new_ground_term(2.0, 2.0, 1.97, 0.04) - 0.3).abs() < 1e-12);
-        assert!((RewardTerms::new_ground_term(1.9, 1.9, 2.0, 0.04) + 0.1).abs() < 1e-12);
+        assert!((RewardTerms::new_ground_term(2.0, 2.0, 1.9, 0.04, 10.0) - 0.4).abs() < 1e-12);
+        assert!((RewardTerms::new_ground_term(2.0, 2.0, 1.97, 0.04, 10.0) - 0.3).abs() < 1e-12);
+        assert!((RewardTerms::new_ground_term(1.9, 1.9, 2.0, 0.04, 10.0) + 0.1).abs() < 1e-12);
+        // a weight of 20 per metre doubles the new ground's pay, not what a
+        // step back costs
+        assert!((RewardTerms::new_ground_term(2.0, 2.0, 1.97, 0.04, 20.0) - 0.6).abs() < 1e-12);
+        assert!((RewardTerms::new_ground_term(1.9, 1.9, 2.0, 0.04, 20.0) + 0.1).abs() < 1e-12);
         // R_o = max(0, 0.02 (10 - |phi| deg)).
         assert!((RewardTerms::orientation_term(0.0) - 0.2).abs() < 1e-12);
         assert!((RewardTerms::orientation_term(5f64.to_radians()) - 0.1).abs() < 1e-12);

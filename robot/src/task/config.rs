@@ -494,18 +494,24 @@ impl TaskConfig {
                 "forward_reward_per_m must be in [0, 10000], got {per_m}"
             ));
         }
+        // A key that shapes distance_reward = "new_ground" only: set with
+        // another distance reward it would be silently ignored.
+        let new_ground_only = |key: &str, verb: &str| -> Result<(), TaskConfigError> {
+            if self.distance_reward == DistanceReward::NewGround {
+                return Ok(());
+            }
+            fail(format!(
+                "{key} {verb} distance_reward = \"new_ground\" only, but distance_reward = {:?}",
+                self.distance_reward.name()
+            ))
+        };
         if let Some(cap) = self.max_paid_progress_m {
             if !(cap.is_finite() && cap > 0.0) {
                 return fail(format!(
                     "max_paid_progress_m must be a positive number (m per phase), got {cap}"
                 ));
             }
-            if self.distance_reward != DistanceReward::NewGround {
-                return fail(format!(
-                    "max_paid_progress_m caps distance_reward = \"new_ground\" only, but distance_reward = {:?}",
-                    self.distance_reward.name()
-                ));
-            }
+            new_ground_only("max_paid_progress_m", "caps")?;
         }
         if let Some(per_m) = self.new_ground_reward_per_m {
             if !(per_m.is_finite() && per_m > 0.0 && per_m <= 1e4) {
@@ -513,12 +519,7 @@ impl TaskConfig {
                     "new_ground_reward_per_m must be in (0, 10000] (reward per metre), got {per_m}"
                 ));
             }
-            if self.distance_reward != DistanceReward::NewGround {
-                return fail(format!(
-                    "new_ground_reward_per_m weighs distance_reward = \"new_ground\" only, but distance_reward = {:?}",
-                    self.distance_reward.name()
-                ));
-            }
+            new_ground_only("new_ground_reward_per_m", "weighs")?;
         }
         let lookahead_m = self.orientation_lookahead_m;
         if !(lookahead_m.is_finite() && (0.0..=100.0).contains(&lookahead_m)) {

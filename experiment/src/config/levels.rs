@@ -162,9 +162,7 @@ impl LevelTally {
         self.falls += u32::from(fell);
         self.total_m += distance_m;
     }
-}
 
-impl LevelTally {
     /// Whether one of the episodes fell.
     pub fn fell(&self) -> bool {
         self.falls > 0

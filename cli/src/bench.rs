@@ -130,8 +130,9 @@ fn measure_once(
 ) -> Result<Measurement> {
     let spec = parse_spec(registry, spec)?;
     let model = load_robot(None)?;
-    let steps = (seconds / robot::DT_SECS).round().max(1.0) as u64;
-    let settle_steps = 240;
+    let steps = (seconds / physics.dt_secs()).round().max(1.0) as u64;
+    // one second
+    let settle_steps = u64::from(physics.step_rate_hz);
     let runs = on_each_thread(
         threads,
         |_| {
@@ -216,7 +217,7 @@ fn measure_phases(
                     Some(l) => task.step_phase_observed(&action, &mut obs, l),
                     None => task.step_phase(&action, &mut obs),
                 };
-                if outcome.steps == robot::action::SAMPLES_PER_PHASE {
+                if outcome.steps == task.world().steps_per_phase() {
                     timed += start.elapsed().as_secs_f64();
                     whole += 1;
                 }
@@ -324,7 +325,7 @@ pub fn run(registry: &Registry, args: &BenchArgs) -> Result<()> {
                 "cores": cores,
                 "seconds_per_world": args.seconds,
                 "repeat": args.repeat,
-                "dt_s": robot::DT_SECS,
+                "dt_s": physics.dt_secs(),
                 "physics": experiment::config::physics_json(&physics),
                 "results": rows
             })

@@ -258,7 +258,7 @@ pub fn stand(registry: &Registry, args: &StandArgs) -> Result<()> {
     logger.log_terrain(world.terrain());
     let tiles_half_side_m = logger.settings().tiles_half_side_m;
     let rate = logger.settings().rate;
-    let steps_per_phase = robot::action::SAMPLES_PER_PHASE;
+    let steps_per_phase = world.steps_per_phase();
     if logger.is_active() {
         logger.log_snapshot(&world.snapshot(tiles_half_side_m, 0, None));
     }

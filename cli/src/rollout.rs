@@ -186,6 +186,7 @@ fn run(registry: &Registry, args: &Run) -> Result<()> {
     let mut video = args.video.recorder(
         model,
         &format!("{} (seed {})", args.policy, args.flags.seed),
+        task.world().dt_secs(),
     )?;
     let mut obs = vec![0.0f32; task.observation_size()];
     task.reset(&mut obs);

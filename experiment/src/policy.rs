@@ -208,6 +208,19 @@ impl Policy {
         Ok(())
     }
 
+    /// Refuses a physics rate a residual policy cannot act at: its
+    /// `control_steps` must divide the phase's steps at `physics`'s rate
+    /// (`source` names where the rate came from).
+    pub fn check_step_rate(&self, physics: &WorldConfig, source: &str) -> Result<()> {
+        if let Self::Residual { driver, .. } = self {
+            driver
+                .config()
+                .validate(physics.steps_per_phase())
+                .with_context(|| format!("{source}: the residual policy's [residual]"))?;
+        }
+        Ok(())
+    }
+
     /// Refuses a scene whose experiment file has a `[residual]` table
     /// (`scene_residual`, from `source`) that is not this policy's own: the
     /// table says what `quadwalk train` trains, and a rollout's policy is

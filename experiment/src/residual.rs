@@ -223,7 +223,7 @@ impl ResidualDriver {
         let feet_base = robot::controller::feet_in_base_m(&pose, world.feet_in_world_m());
         let (progress, swing, planned) = match &self.run {
             Some(run) => (
-                run.steps as f64 / robot::action::SAMPLES_PER_PHASE as f64,
+                run.steps as f64 / run.steps_per_phase as f64,
                 Some(run.plan.swing_leg.index()),
                 task.planned_feet_m(run),
             ),

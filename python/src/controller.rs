@@ -26,10 +26,11 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use robot::RobotModel;
-use robot::action::{ACTION_SIZE, SAMPLES_PER_PHASE};
+use robot::WorldConfig;
+use robot::action::ACTION_SIZE;
 use robot::controller::{PhaseController, PhasePlan, RobotState};
 use robot::task::{Task, TaskConfig};
-use robot::world::{DT_SECS, World};
+use robot::world::World;
 
 use crate::scene::{Scene, registry, value_error};
 
@@ -122,14 +123,21 @@ pub struct Controller {
 }
 
 impl Controller {
-    fn of_task(task: &TaskConfig) -> PyResult<Self> {
+    fn of_task(task: &TaskConfig, physics: &WorldConfig) -> PyResult<Self> {
         let inner = PhaseController::for_model(
             &RobotModel::laikago(),
             task.observation,
             task.action_prior,
             task.swing_height_reference,
         )
-        .map_err(value_error)?;
+        .map_err(value_error)?
+        .with_step_rate_hz(physics.step_rate_hz)
+        .ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "step_rate_hz = {} is not a rate a world can step at",
+                physics.step_rate_hz
+            ))
+        })?;
         Ok(Self {
             inner,
             needs_com: task.action_prior != robot::task::ActionPrior::None,
@@ -157,7 +165,7 @@ impl Controller {
     #[pyo3(signature = (config=None))]
     fn new(config: Option<&str>) -> PyResult<Self> {
         let scene = Scene::new(None, config, None)?;
-        Self::of_task(&scene.experiment.task)
+        Self::of_task(&scene.experiment.task, &scene.experiment.physics)
     }
 
     /// The controller a trained policy (an exported policy, a run or a
@@ -166,12 +174,12 @@ impl Controller {
     #[staticmethod]
     fn for_policy(path: &str) -> PyResult<Self> {
         let policy = experiment::Policy::from_arg(&registry(), path, None).map_err(value_error)?;
-        let experiment::Policy::Trained { task, .. } = policy else {
+        let experiment::Policy::Trained { task, physics, .. } = policy else {
             return Err(PyValueError::new_err(format!(
                 "policy {path:?} is not a trained phase-level policy (the scripted crawl and residual policies are not)"
             )));
         };
-        Self::of_task(&task)
+        Self::of_task(&task, &physics)
     }
 
     /// Observation values.
@@ -219,16 +227,17 @@ impl Controller {
             .collect()
     }
 
-    /// Control steps per phase (the PD loop's 240 Hz over 0.75 s).
-    #[classattr]
-    fn samples_per_phase() -> usize {
-        SAMPLES_PER_PHASE
+    /// Control steps per phase: 0.75 s at the physics rate of the
+    /// config or policy (180 at the paper's 240 Hz).
+    #[getter]
+    fn samples_per_phase(&self) -> usize {
+        self.inner.steps_per_phase()
     }
 
-    /// Seconds per control step.
-    #[classattr]
-    fn control_step_secs() -> f64 {
-        DT_SECS
+    /// Seconds per control step (1/240 at the paper's rate).
+    #[getter]
+    fn control_step_secs(&self) -> f64 {
+        self.inner.dt_secs()
     }
 
     /// Starts an episode at `state`.
@@ -273,15 +282,16 @@ impl Controller {
     }
 
     /// The joint targets (rad, the robot's 12 joints in order) of control
-    /// step `sample` (1 to 180) of the planned phase.
+    /// step `sample` (1 to `samples_per_phase`) of the planned phase.
     fn joint_targets<'py>(
         &self,
         py: Python<'py>,
         sample: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        if !(1..=SAMPLES_PER_PHASE).contains(&sample) {
+        let samples = self.inner.steps_per_phase();
+        if !(1..=samples).contains(&sample) {
             return Err(PyValueError::new_err(format!(
-                "sample {sample}: a phase has samples 1 to {SAMPLES_PER_PHASE}"
+                "sample {sample}: a phase has samples 1 to {samples}"
             )));
         }
         let plan = self.plan()?;
@@ -349,7 +359,14 @@ impl Sim {
         });
     }
 
-    /// Sets the PD targets (rad, 12) and takes one 1/240 s step.
+    /// One physics step, s (1/240 at the paper's rate).
+    #[getter]
+    fn dt_secs(&mut self) -> f64 {
+        self.world().dt_secs()
+    }
+
+    /// Sets the PD targets (rad, 12) and takes one physics step (1/240 s
+    /// at the paper's rate, the config's `[physics] step_rate_hz`).
     fn step(&mut self, targets_rad: PyReadonlyArray1<'_, f64>) -> PyResult<()> {
         let targets = targets_rad.as_slice().map_err(value_error)?.to_vec();
         let world = self.world();

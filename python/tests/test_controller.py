@@ -76,3 +76,28 @@ def test_bad_states_and_calls_are_named():
         controller.plan_phase(np.zeros(26, np.float32), state)
     with pytest.raises(ValueError, match="12 joints"):
         robot.step(np.zeros(11))
+
+
+def test_the_controller_steps_at_its_configs_rate_and_run_phase_refuses_another(tmp_path):
+    """A config's `[physics] step_rate_hz` sets the controller's control
+    steps and the bare robot's step; `run_phase` refuses a robot that steps
+    otherwise than the controller plans."""
+    assert quadwalk.Controller().samples_per_phase == 180
+    assert quadwalk.Controller().control_step_secs == pytest.approx(1 / 240)
+    config = tmp_path / "coarse.toml"
+    config.write_text('[terrain]\nspec = "rigid"\n\n[physics]\nstep_rate_hz = 120\n')
+    coarse = quadwalk.Controller(config=str(config))
+    assert coarse.samples_per_phase == 90
+    assert coarse.control_step_secs == pytest.approx(1 / 120)
+    robot = quadwalk.Sim(config=str(config))
+    assert robot.dt_secs == pytest.approx(1 / 120)
+    robot.reset()
+    state = robot.state()
+    coarse.begin_episode(state)
+    quadwalk.run_phase(coarse, robot, np.zeros(27, np.float32), state)
+    with pytest.raises(ValueError, match="samples 1 to 90"):
+        coarse.joint_targets(91)
+    paper = quadwalk.Controller()
+    paper.begin_episode(robot.state())
+    with pytest.raises(ValueError, match="the robot steps .* the controller plans steps"):
+        quadwalk.run_phase(paper, robot, np.zeros(27, np.float32), robot.state())

@@ -23,7 +23,9 @@ use nalgebra::Vector3;
 pub const ACTION_SIZE: usize = 27;
 /// Duration of one phase, s.
 pub const PHASE_SECS: f64 = 0.75;
-/// Samples (IK solves and physics steps) per phase: 0.75 s at 240 Hz.
+/// Samples (IK solves and physics steps) per phase at the paper's 240 Hz:
+/// 0.75 s of 1/240 s steps (a world at another `[physics] step_rate_hz`
+/// takes [`crate::World::steps_per_phase`]).
 pub const SAMPLES_PER_PHASE: usize = 180;
 /// Hind-foot frontal shift delta, m.
 pub const HIND_FRONTAL_SHIFT_M: f64 = -0.02;

@@ -5,8 +5,10 @@
 //! velocity, foot positions, hip heights), the [`PhaseController`] builds
 //! the policy's observation, turns the policy's 27-D action into the
 //! phase's three Bezier curves ([`PhasePlan`]) and yields, for each of the
-//! phase's 180 control steps (240 Hz), the twelve joint targets the PD
-//! loop tracks (IK of each foot in the target base frame). It keeps the
+//! phase's control steps (180 at the paper's 240 Hz;
+//! [`PhaseController::with_step_rate_hz`] sets another rate), the twelve
+//! joint targets the PD loop tracks (IK of each foot in the target base
+//! frame). It keeps the
 //! memory the observation needs (foot positions at the last three phase
 //! starts and 1 and 2 steps ago, the phase counter).
 //!
@@ -19,11 +21,11 @@
 //! loop {
 //!     controller.observe(&state, goal_xy_m, &mut obs);
 //!     let plan = controller.plan_phase(&policy(&obs), &state);
-//!     for sample in 1..=SAMPLES_PER_PHASE {
+//!     for sample in 1..=controller.steps_per_phase() {
 //!         controller.joint_targets(&plan, sample, &mut targets);
 //!         robot.set_pd_targets(&targets);
 //!         controller.record_step(&state);   // the state before the step
-//!         robot.step();                     // 1/240 s
+//!         robot.step();                     // controller.dt_secs()
 //!         state = robot.measure();
 //!     }
 //!     controller.end_phase(&plan);
@@ -32,14 +34,15 @@
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-use crate::action::{ACTION_SIZE, CubicBezier, PhaseCurves, SAMPLES_PER_PHASE, curves_from_action};
+use crate::action::{ACTION_SIZE, CubicBezier, PhaseCurves, curves_from_action};
 use crate::kinematics::LegKinematics;
 use crate::model::{LegName, RobotModel};
 use crate::scripted::ScriptedCrawl;
 use crate::task::{
     ActionPrior, FOOT_HISTORY_PHASES, ObservationConfig, SWING_ORDER, SwingHeightReference,
 };
-use crate::world::{DT_SECS, World, WorldError, squat_rad_of};
+use crate::world::{World, WorldError, squat_rad_of};
+use crate::world_config::WorldConfig;
 
 /// What the controller reads of the robot: the measured (or estimated)
 /// state, world frame unless named otherwise.
@@ -169,6 +172,10 @@ pub struct PhaseController {
     observation: ObservationConfig,
     action_prior: ActionPrior,
     swing_height_reference: SwingHeightReference,
+    /// control steps (physics steps) in a phase
+    steps_per_phase: usize,
+    /// one control step, s
+    dt_secs: f64,
     memory: Memory,
 }
 
@@ -197,6 +204,7 @@ impl PhaseController {
             legs[leg].forward([squat_rad[a], squat_rad[h], squat_rad[k]])
         });
         let feet = [Vector3::zeros(); 4];
+        let paper = WorldConfig::default();
         Self {
             legs,
             leg_joints,
@@ -205,6 +213,8 @@ impl PhaseController {
             observation,
             action_prior,
             swing_height_reference,
+            steps_per_phase: paper.steps_per_phase(),
+            dt_secs: paper.dt_secs(),
             memory: Memory {
                 phase: 0,
                 phase_start_feet: [feet; FOOT_HISTORY_PHASES],
@@ -242,14 +252,43 @@ impl PhaseController {
         action_prior: ActionPrior,
         swing_height_reference: SwingHeightReference,
     ) -> Self {
-        Self::new(
+        let mut controller = Self::new(
             world.model(),
             world.legs().clone(),
             world.squat_rad(),
             observation,
             action_prior,
             swing_height_reference,
-        )
+        );
+        controller.steps_per_phase = world.steps_per_phase();
+        controller.dt_secs = world.dt_secs();
+        controller
+    }
+
+    /// The controller stepping at `step_rate_hz` (the paper's 240 unless
+    /// set): a phase of 0.75 x rate control steps of 1 / rate s each, as
+    /// a world with that `[physics] step_rate_hz` steps; `None` for a rate
+    /// a world cannot take (see [`crate::world_config::STEP_RATE_RANGE_HZ`]).
+    pub fn with_step_rate_hz(mut self, step_rate_hz: u32) -> Option<Self> {
+        let physics = WorldConfig {
+            step_rate_hz,
+            ..WorldConfig::default()
+        };
+        physics.validate().ok()?;
+        self.steps_per_phase = physics.steps_per_phase();
+        self.dt_secs = physics.dt_secs();
+        Some(self)
+    }
+
+    /// Control steps in a phase (180 at the paper's
+    /// [`crate::world_config::PAPER_STEP_RATE_HZ`]).
+    pub fn steps_per_phase(&self) -> usize {
+        self.steps_per_phase
+    }
+
+    /// One control step, s.
+    pub fn dt_secs(&self) -> f64 {
+        self.dt_secs
     }
 
     /// Observation values.
@@ -386,7 +425,7 @@ impl PhaseController {
         }
         if c.foot_velocity {
             for (p, q) in now.iter().zip(&memory.feet_1_step_ago) {
-                out.extend(((p - q) / DT_SECS).iter());
+                out.extend(((p - q) / self.dt_secs).iter());
             }
         }
         let goal = state.in_base(self.observed_goal_xy_m(state, goal_xy_m));
@@ -486,7 +525,7 @@ impl PhaseController {
     }
 
     /// Writes the joint targets of control step `sample` (1 to
-    /// [`SAMPLES_PER_PHASE`], at t = sample / 180) of `plan` into
+    /// [`Self::steps_per_phase`], at t = sample / steps) of `plan` into
     /// `targets_rad` (the legs' joints, in the model's joint order); returns
     /// how many legs' IK was clamped (out of reach or past a limit).
     ///
@@ -529,7 +568,7 @@ impl PhaseController {
     /// the base's target frame of that sample, m: the points the IK of
     /// [`Self::joint_targets`] solves for.
     pub fn planned_feet_m(&self, plan: &PhasePlan, sample: usize) -> [Vector3<f64>; 4] {
-        let t = sample as f64 / SAMPLES_PER_PHASE as f64;
+        let t = sample as f64 / self.steps_per_phase as f64;
         let curves = &plan.curves;
         let rpy = curves.base_orientation.at(t);
         let offset = Isometry3::from_parts(
@@ -580,46 +619,66 @@ mod tests {
     use crate::task::{Task, TaskConfig};
 
     fn world_on(spec: &str) -> World {
-        crate::test_worlds::laikago_on(spec, 3, [0.0, 0.0], WorldConfig::default())
+        world_at(spec, WorldConfig::default())
+    }
+
+    fn world_at(spec: &str, physics: WorldConfig) -> World {
+        crate::test_worlds::laikago_on(spec, 3, [0.0, 0.0], physics)
     }
 
     /// A robot's loop (the module docs' loop, on a second world standing in
     /// for the robot) gives the task's observations, joint targets and
     /// motion bit for bit, for the goal the task heads for, with either
-    /// origin of the swing foot's heights.
+    /// origin of the swing foot's heights, at the paper's 240 Hz and at
+    /// 120 Hz (a controller set to the rate by hand steps as one taken
+    /// from the world).
     #[test]
     fn the_controller_on_its_own_drives_a_world_as_the_task_does() {
-        for swing_height_reference in [SwingHeightReference::Foot, SwingHeightReference::Touchdown]
-        {
-            drive_a_world_as_the_task_does(TaskConfig {
-                observation: ObservationConfig {
-                    goal_line_ahead_m: Some(1.0),
-                    ..ObservationConfig::default()
+        for (swing_height_reference, step_rate_hz) in [
+            (SwingHeightReference::Foot, 240),
+            (SwingHeightReference::Touchdown, 240),
+            (SwingHeightReference::Foot, 120),
+        ] {
+            drive_a_world_as_the_task_does(
+                TaskConfig {
+                    observation: ObservationConfig {
+                        goal_line_ahead_m: Some(1.0),
+                        ..ObservationConfig::default()
+                    },
+                    swing_height_reference,
+                    ..TaskConfig::default()
                 },
-                swing_height_reference,
-                ..TaskConfig::default()
-            });
+                WorldConfig {
+                    step_rate_hz,
+                    ..WorldConfig::default()
+                },
+            );
         }
     }
 
-    fn drive_a_world_as_the_task_does(config: TaskConfig) {
+    fn drive_a_world_as_the_task_does(config: TaskConfig, physics: WorldConfig) {
         let start = [1.3, -0.4];
-        let mut task = Task::new(world_on("elastic:5cm"), config.clone(), 0);
+        let mut task = Task::new(world_at("elastic:5cm", physics.clone()), config.clone(), 0);
         let mut task_obs = vec![0.0; task.observation_size()];
         task.reset_at(start, &mut task_obs);
 
-        let mut robot = world_on("elastic:5cm");
+        let mut robot = world_at("elastic:5cm", physics.clone());
         robot.reset_terrain();
         robot.reset_robot(start, 0.0);
-        for _ in 0..(config.settle_secs / DT_SECS).round() as usize {
+        for _ in 0..(config.settle_secs / robot.dt_secs()).round() as usize {
             robot.step();
         }
-        let mut controller = PhaseController::of_world(
-            &robot,
+        let mut controller = PhaseController::new(
+            robot.model(),
+            robot.legs().clone(),
+            robot.squat_rad(),
             config.observation,
             config.action_prior,
             config.swing_height_reference,
-        );
+        )
+        .with_step_rate_hz(physics.step_rate_hz)
+        .expect("a world's rate");
+        assert_eq!(controller.steps_per_phase(), physics.steps_per_phase());
         controller.begin_episode(&RobotState::of_world(&robot));
         let mut obs = vec![0.0; controller.observation_size()];
         let mut targets = robot.joint_targets_rad().to_vec();
@@ -635,7 +694,7 @@ mod tests {
             );
             assert_eq!(action, crawl.act(&task), "phase {phase}'s action");
             let plan = controller.plan_phase(&action, &state);
-            for sample in 1..=SAMPLES_PER_PHASE {
+            for sample in 1..=controller.steps_per_phase() {
                 controller.joint_targets(&plan, sample, &mut targets);
                 robot.set_joint_targets_rad(&targets);
                 controller.record_step(RobotState::of_world(&robot).feet_in_base_m());
@@ -723,7 +782,7 @@ mod tests {
                     );
                 }
                 assert_eq!(plan.curves.base_position, same.curves.base_position);
-                for sample in 1..=SAMPLES_PER_PHASE {
+                for sample in 1..=touchdown.steps_per_phase() {
                     touchdown.joint_targets(&plan, sample, &mut targets);
                     world.set_joint_targets_rad(&targets);
                     world.step();

@@ -43,9 +43,9 @@ pub fn stand_observed(
     seconds: f64,
     after_step: &mut dyn FnMut(&World, u64),
 ) -> StandReport {
-    let steps = (seconds / crate::DT_SECS).round().max(1.0) as u64;
+    let steps = (seconds / world.dt_secs()).round().max(1.0) as u64;
     let window_secs = SETTLED_WINDOW_SECS.min(seconds / 2.0);
-    let window_start = steps.saturating_sub((window_secs / crate::DT_SECS).round() as u64);
+    let window_start = steps.saturating_sub((window_secs / world.dt_secs()).round() as u64);
     let mut max_tilt_rad: f64 = 0.0;
     let (mut min_h, mut max_h) = (f64::INFINITY, f64::NEG_INFINITY);
     let (mut sink_sum, mut sink_samples) = (0.0, 0u64);
@@ -77,7 +77,7 @@ pub fn stand_observed(
     let terrain = world.terrain();
     let region = &terrain.regions()[terrain.region_index_at(base.x, base.y)];
     StandReport {
-        seconds: steps as f64 * crate::DT_SECS,
+        seconds: steps as f64 * world.dt_secs(),
         steps,
         base_height_m: base.z - world.rest_height_m(base.x, base.y),
         base_height_drift_m: max_h - min_h,
@@ -143,6 +143,32 @@ mod tests {
             (ra.base_height_m - rb.base_height_m).abs() < 0.005,
             "{ra:?} vs {rb:?}"
         );
+    }
+
+    #[test]
+    fn at_half_the_paper_rate_the_squat_stands_as_at_240_hz() {
+        // 3 s at 120 Hz are 360 steps of 1/120 s; the robot settles on 5 cm
+        // tiles to the base height and sink of 240 Hz within 2 mm.
+        let coarse = WorldConfig {
+            step_rate_hz: 120,
+            ..WorldConfig::default()
+        };
+        let mut a = world_on("elastic:5cm", [0.0, 0.0], WorldConfig::default());
+        let mut b = world_on("elastic:5cm", [0.0, 0.0], coarse);
+        let (ra, rb) = (stand(&mut a, 3.0), stand(&mut b, 3.0));
+        assert_eq!((ra.steps, rb.steps), (720, 360));
+        assert!((b.time_secs() - 3.0).abs() < 1e-9, "{}", b.time_secs());
+        for (what, x, y) in [
+            ("base height", ra.base_height_m, rb.base_height_m),
+            ("sink", ra.mean_loaded_sink_m, rb.mean_loaded_sink_m),
+        ] {
+            assert!(
+                (x - y).abs() < 0.002,
+                "{what}: {x} m at 240 Hz, {y} m at 120 Hz"
+            );
+        }
+        assert!(rb.max_tilt_deg < 1.0, "{rb:?}");
+        assert!(rb.base_height_drift_m < 0.002, "{rb:?}");
     }
 
     #[test]

@@ -27,7 +27,8 @@ use crate::model::{Geometry, RobotModel};
 use crate::seam::{from_pose, from_vector, to_matrix, to_pose, to_vector};
 pub use crate::world_config::{PdModel, WorldConfig, WorldConfigError};
 
-/// Physics step, seconds (240 Hz, as the paper).
+/// The paper's physics step, seconds (240 Hz); a world steps at its
+/// config's `step_rate_hz` ([`World::dt_secs`]).
 pub const DT_SECS: f64 = 1.0 / 240.0;
 
 /// Toe-centre height below the base in the default wide squat, m.
@@ -118,7 +119,7 @@ impl World {
         let legs = LegKinematics::from_model(&model)?;
         let mut physics = PhysicsWorld::new();
         physics.gravity = Vector::new(0.0, 0.0, -terrain_plugins::STANDARD_GRAVITY_M_PER_S2 as f32);
-        physics.integration_parameters.dt = DT_SECS as f32;
+        physics.integration_parameters.dt = config.dt_secs() as f32;
         physics.integration_parameters.num_solver_iterations = config.solver_iterations;
         physics.integration_parameters.num_internal_pgs_iterations = config.pgs_iterations;
         physics.integration_parameters.max_ccd_substeps = usize::from(config.ccd);
@@ -294,15 +295,26 @@ impl World {
         }
     }
 
-    /// One physics step of [`DT_SECS`].
+    /// The physics step, s (1 / the config's `step_rate_hz`).
+    pub fn dt_secs(&self) -> f64 {
+        self.config.dt_secs()
+    }
+
+    /// Physics steps in a 0.75 s phase at this world's rate.
+    pub fn steps_per_phase(&self) -> usize {
+        self.config.steps_per_phase()
+    }
+
+    /// One physics step of [`Self::dt_secs`].
     pub fn step(&mut self) {
         if self.config.pd == PdModel::ImplicitSpring {
             self.set_implicit_springs();
         }
-        self.terrain.before_step(&mut self.physics, DT_SECS);
+        let dt_secs = self.dt_secs();
+        self.terrain.before_step(&mut self.physics, dt_secs);
         self.physics.step();
-        self.terrain.after_step(&mut self.physics, DT_SECS);
-        self.time_secs += DT_SECS;
+        self.terrain.after_step(&mut self.physics, dt_secs);
+        self.time_secs += dt_secs;
         self.steps += 1;
         // The torque the PD applies (rapier does not report it).
         let q = self.joint_positions_rad();

@@ -12,7 +12,15 @@
 //! kd_n_m_s_per_rad = 8.0
 //! friction = 1.0          # of the robot's colliders
 //! prediction_distance_m = 0.02  # rapier's: shapes this close get speculative contacts
+//! step_rate_hz = 240      # physics steps per second (the paper's 240)
 //! ```
+//!
+//! `step_rate_hz` sets the physics step, 1 / rate s, and with it the
+//! control points of a 0.75 s phase (180 at 240 Hz, 90 at 120 Hz): the
+//! phase's curves are sampled, solved by IK and stepped that many times.
+//! A coarser step is cheaper (120 Hz costs about half of 240 Hz per phase)
+//! and simulates the same scene less finely; a policy carries the rate it
+//! trained at, and `quadwalk eval --step-rate-hz` runs it at another.
 
 use serde::{Deserialize, Serialize};
 
@@ -97,6 +105,22 @@ pub struct WorldConfig {
     /// matrix, and on tiles a sunk foot is within 2 cm of the neighbouring
     /// tiles' side walls (docs/notebook/2026-11-29-physics-three-times-faster.md, "Contact prediction distance").
     pub prediction_distance_m: f64,
+    /// physics steps per second, Hz: the step is 1 / rate s and a 0.75 s
+    /// phase takes 0.75 x rate steps, so the rate is a multiple of 4
+    /// (written to a config only when it is not the paper's 240)
+    #[serde(skip_serializing_if = "is_paper_step_rate")]
+    pub step_rate_hz: u32,
+}
+
+/// The paper's physics rate, Hz (a 1/240 s step, 180 per phase).
+pub const PAPER_STEP_RATE_HZ: u32 = 240;
+
+/// The rates `step_rate_hz` may take, Hz: a quarter to four times the
+/// paper's (45 to 720 steps a phase).
+pub const STEP_RATE_RANGE_HZ: std::ops::RangeInclusive<u32> = 60..=960;
+
+fn is_paper_step_rate(rate_hz: &u32) -> bool {
+    *rate_hz == PAPER_STEP_RATE_HZ
 }
 
 impl Default for WorldConfig {
@@ -110,6 +134,7 @@ impl Default for WorldConfig {
             ccd: true,
             friction: 1.0,
             prediction_distance_m: 0.02,
+            step_rate_hz: PAPER_STEP_RATE_HZ,
         }
     }
 }
@@ -162,7 +187,26 @@ impl WorldConfig {
                 "prediction_distance_m must be in (0, 0.1] m, got {d}"
             ));
         }
+        let rate = self.step_rate_hz;
+        if !(STEP_RATE_RANGE_HZ.contains(&rate) && rate.is_multiple_of(4)) {
+            return fail(format!(
+                "step_rate_hz must be a multiple of 4 in {}..={} Hz (a 0.75 s phase takes 0.75 x rate steps), got {rate}",
+                STEP_RATE_RANGE_HZ.start(),
+                STEP_RATE_RANGE_HZ.end()
+            ));
+        }
         Ok(())
+    }
+
+    /// The physics step, s: 1 / `step_rate_hz`.
+    pub fn dt_secs(&self) -> f64 {
+        1.0 / f64::from(self.step_rate_hz)
+    }
+
+    /// Physics steps (IK solves, control points) in a 0.75 s phase:
+    /// 0.75 x `step_rate_hz`.
+    pub fn steps_per_phase(&self) -> usize {
+        self.step_rate_hz as usize * 3 / 4
     }
 }
 
@@ -191,6 +235,23 @@ mod tests {
             "{text}"
         );
         assert_eq!(from_toml(&text).unwrap(), physics);
+        assert!(
+            !text.contains("step_rate_hz"),
+            "the paper's rate is not written: {text}"
+        );
+    }
+
+    #[test]
+    fn the_step_rate_sets_the_step_and_the_steps_of_a_phase() {
+        let paper = WorldConfig::default();
+        assert_eq!(paper.steps_per_phase(), crate::action::SAMPLES_PER_PHASE);
+        assert_eq!(paper.dt_secs(), crate::DT_SECS);
+        let coarse = from_toml("step_rate_hz = 120").unwrap();
+        assert_eq!(coarse.steps_per_phase(), 90);
+        assert!((coarse.dt_secs() * coarse.steps_per_phase() as f64 - 0.75).abs() < 1e-12);
+        let text = toml::to_string(&coarse).unwrap();
+        assert!(text.ends_with("step_rate_hz = 120\n"), "{text}");
+        assert_eq!(from_toml(&text).unwrap(), coarse);
     }
 
     #[test]
@@ -209,6 +270,15 @@ mod tests {
                 "prediction_distance_m = 0.5",
                 "prediction_distance_m must be in (0, 0.1] m",
             ),
+            (
+                "step_rate_hz = 130",
+                "step_rate_hz must be a multiple of 4 in 60..=960 Hz",
+            ),
+            (
+                "step_rate_hz = 56",
+                "step_rate_hz must be a multiple of 4 in 60..=960 Hz",
+            ),
+            ("step_rate_hz = 964", "got 964"),
             (
                 "pd = \"spring\"",
                 "pd must be \"implicit_spring\" or \"motor\", got \"spring\"",

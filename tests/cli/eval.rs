@@ -263,6 +263,60 @@ fn a_trained_policy_evaluates_like_it_rolls_out_and_misfits_are_refused() {
     );
 }
 
+/// A policy trained at 120 Hz carries its rate into its checkpoint and
+/// evaluates at it; `--step-rate-hz 240` judges it at the paper's rate
+/// (eval.json says which); a rate a world cannot step at is refused.
+#[test]
+fn a_policy_trained_at_120_hz_evaluates_at_its_rate_or_the_one_asked() {
+    let dir = scratch_dir("eval-step-rate");
+    let config = dir.join("tiny-120.toml");
+    std::fs::write(
+        &config,
+        super::train::TINY.replace("[ppo]", "[physics]\nstep_rate_hz = 120\n\n[ppo]"),
+    )
+    .unwrap();
+    let run = dir.join("run");
+    train_tiny(&config, &run, "1");
+    let saved = std::fs::read_to_string(run.join("config.toml")).unwrap();
+    assert!(saved.contains("step_rate_hz = 120"), "{saved}");
+    let args = [
+        "--policy",
+        s(&run),
+        "--terrain",
+        "rigid",
+        "--episodes",
+        "1",
+        "--phases",
+        "2",
+    ];
+    let own = eval_json(&args, &dir.join("own"));
+    assert_eq!(own["step_rate_hz"], 120);
+    let mut paper_args = args.to_vec();
+    paper_args.extend_from_slice(&["--step-rate-hz", "240"]);
+    let paper = eval_json(&paper_args, &dir.join("paper"));
+    assert!(paper.get("step_rate_hz").is_none(), "240 Hz is not written");
+    assert_eq!(paper["episodes"][0]["phases"], 2);
+    for (rate, expected) in [
+        (
+            "130",
+            "--step-rate-hz 130: step_rate_hz must be a multiple of 4 in 60..=960 Hz",
+        ),
+        (
+            "0",
+            "--step-rate-hz 0: step_rate_hz must be a multiple of 4",
+        ),
+    ] {
+        let mut bad = args.to_vec();
+        bad.extend_from_slice(&["--step-rate-hz", rate]);
+        let mut all = vec!["eval"];
+        all.extend_from_slice(&bad);
+        let err = failure(&all, 1);
+        assert!(err.contains(expected), "{err}");
+    }
+    let err = failure(&["eval", "--terrain", "rigid", "--step-rate-hz", "x"], 2);
+    assert!(err.contains("--step-rate-hz"), "{err}");
+}
+
 #[test]
 fn bad_eval_input_is_refused_with_what_is_wrong() {
     let err = failure(&["eval", "--policy", "no/such/run"], 1);

@@ -112,7 +112,7 @@ fn simulated_frames(spec: &str, seed: u64, phases: usize, rate: viz::LogRate) ->
     }
     impl PhaseObserver for Recorder {
         fn stepped(&mut self, task: &Task, step: usize) {
-            if self.rate.logs_step(step, robot::action::SAMPLES_PER_PHASE) {
+            if self.rate.logs_step(step, task.world().steps_per_phase()) {
                 self.record(task);
                 self.last = Some((task.phase(), step));
             }

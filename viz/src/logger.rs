@@ -563,7 +563,7 @@ impl PhaseObserver for RolloutLogger {
             && self
                 .settings
                 .rate
-                .logs_step(step_in_phase, robot::action::SAMPLES_PER_PHASE)
+                .logs_step(step_in_phase, task.world().steps_per_phase())
         {
             self.log_frame(task, step_in_phase);
         }

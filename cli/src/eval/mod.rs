@@ -52,6 +52,10 @@ pub struct EvalArgs {
     /// Worker threads, one episode each at a time [default: all cores]
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     threads: Option<u32>,
+    /// Run the physics at this rate, Hz, instead of the one the policy
+    /// trained at (e.g. 240, the paper's, for a policy trained at 120)
+    #[arg(long, value_name = "HZ")]
+    step_rate_hz: Option<u32>,
     /// Print the summary and episodes as one JSON object instead of text
     #[arg(long)]
     json: bool,
@@ -62,7 +66,7 @@ pub struct EvalArgs {
     out: Option<PathBuf>,
     /// Lay these evaluations (directories holding eval.json) side by side
     /// instead of running one
-    #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["policy", "terrain", "config", "robot", "episodes", "phases", "seed", "stochastic", "threads", "video"])]
+    #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["policy", "terrain", "config", "robot", "episodes", "phases", "seed", "stochastic", "threads", "step_rate_hz", "video"])]
     compare: Vec<PathBuf>,
     #[command(flatten)]
     rerun: RerunArgs,
@@ -105,7 +109,9 @@ fn record_episode(
     video: &VideoArgs,
 ) -> Result<Option<VideoSummary>> {
     let label = format!("{} (seed {seed})", request.policy);
-    let Some(mut recorder) = video.recorder(request.robot.clone(), &label)? else {
+    let Some(mut recorder) =
+        video.recorder(request.robot.clone(), &label, scene.physics().dt_secs())?
+    else {
         return Ok(None);
     };
     let mut policy = Policy::from_arg(
@@ -140,6 +146,7 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
         phases: args.phases,
         stochastic: args.stochastic,
         threads: args.threads.map(|n| n as usize),
+        step_rate_hz: args.step_rate_hz,
     };
     // the policy and its fit to the scene are checked before the output
     // directory is made
@@ -282,6 +289,13 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
         report.first_seed,
         report.first_seed + s.episodes as u64 - 1
     );
+    if report.step_rate_hz != robot::world_config::PAPER_STEP_RATE_HZ {
+        out!(
+            "physics         {} Hz ({} steps a phase; the paper's: 240)",
+            report.step_rate_hz,
+            report.step_rate_hz * 3 / 4
+        );
+    }
     out!(
         "success         {}/{} ran every phase ({:.1} %)",
         s.successes,

@@ -67,7 +67,7 @@ pub fn variants_markdown(runs: &[Run]) -> String {
     let mut out = String::from(
         "| variant | training seeds | success per seed | success | distance, m (mean; min-max) | speed, m/s (mean) | falls by cause |\n| --- | --- | --- | ---: | --- | ---: | --- |\n",
     );
-    let phase_secs = robot::action::SAMPLES_PER_PHASE as f64 * robot::DT_SECS;
+    let phase_secs = robot::action::PHASE_SECS;
     for variant in variants {
         let own: Vec<&Run> = runs.iter().filter(|r| r.variant == variant).collect();
         let episodes: Vec<_> = own

@@ -263,6 +263,7 @@ impl Evaluations<'_> {
                 phases: key.phases,
                 stochastic: false,
                 threads: self.args.threads.map(|t| t as usize),
+                step_rate_hz: None,
             },
         )
         .with_context(|| format!("evaluating {policy} on {terrain}"))?;

@@ -2,8 +2,8 @@
 //! drawn on the CPU, without a GPU or a display (a server, CI, a cluster
 //! node), frame by frame as the run goes, straight into the file.
 //!
-//! A frame is taken every round(240 / fps) physics steps (the physics runs
-//! at 240 Hz; the default 30 fps is every 8th step) and once before the
+//! A frame is taken every round(rate / fps) physics steps (at the paper's
+//! 240 Hz the default 30 fps is every 8th step) and once before the
 //! first step; its content is in `draw.rs`. GIF delays are whole
 //! hundredths of a second, so frame k is shown from round(100 k / fps) to
 //! round(100 (k + 1) / fps) cs: the animation plays in real time on
@@ -26,9 +26,6 @@ use robot::task::{PhaseOutcome, Task};
 use terrain_plugins::{Rect, TileState};
 
 use gif_file::GifWriter;
-
-/// The physics steps per simulated second.
-const STEPS_PER_S: f64 = 1.0 / robot::DT_SECS;
 
 /// A frame's size, pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,8 +74,8 @@ pub struct VideoArgs {
     /// without a GPU or display
     #[arg(long, value_name = "FILE.gif")]
     pub video: Option<PathBuf>,
-    /// Frames per second of simulated time (a frame every round(240 / fps)
-    /// physics steps)
+    /// Frames per second of simulated time (a frame every round(rate / fps)
+    /// physics steps, 240 Hz unless the policy trained at another rate)
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=240), requires = "video")]
     pub video_fps: u32,
     /// Frame size, pixels: WIDTHxHEIGHT
@@ -121,12 +118,19 @@ impl VideoArgs {
 
     /// The recorder for a run, when `--video` was given; `label` names the
     /// run in the caption.
-    pub fn recorder(&self, model: Arc<RobotModel>, label: &str) -> Result<Option<VideoRecorder>> {
+    /// `dt_secs` is the world's physics step.
+    pub fn recorder(
+        &self,
+        model: Arc<RobotModel>,
+        label: &str,
+        dt_secs: f64,
+    ) -> Result<Option<VideoRecorder>> {
         let Some(path) = &self.video else {
             return Ok(None);
         };
         self.check()?;
-        VideoRecorder::create(path, self.video_fps, self.video_size, model, label).map(Some)
+        VideoRecorder::create(path, self.video_fps, self.video_size, model, label, dt_secs)
+            .map(Some)
     }
 }
 
@@ -163,15 +167,17 @@ impl VideoRecorder {
         size: FrameSize,
         model: Arc<RobotModel>,
         label: &str,
+        dt_secs: f64,
     ) -> Result<Self> {
-        let steps_per_frame = (STEPS_PER_S / f64::from(fps)).round().max(1.0) as u64;
+        let steps_per_s = 1.0 / dt_secs;
+        let steps_per_frame = (steps_per_s / f64::from(fps)).round().max(1.0) as u64;
         let size_px = (size.width_px, size.height_px);
         let writer = GifWriter::create(path, (size.width_px as u16, size.height_px as u16), 0)?;
         Ok(Self {
             writer,
             size_px,
             steps_per_frame,
-            fps: STEPS_PER_S / steps_per_frame as f64,
+            fps: steps_per_s / steps_per_frame as f64,
             model,
             label: label.to_string(),
             start_x_m: None,

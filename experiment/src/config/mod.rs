@@ -237,7 +237,7 @@ impl Experiment {
                         anyhow!("config {source} [residual]: {}", e.message())
                     })?;
                 residual
-                    .validate()
+                    .validate(physics.steps_per_phase())
                     .with_context(|| format!("config {source} [residual]"))?;
                 Some(residual)
             }

@@ -24,7 +24,6 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use robot::action::SAMPLES_PER_PHASE;
 use serde::{Deserialize, Serialize};
 
 /// The `[residual]` table.
@@ -59,14 +58,15 @@ impl Default for ResidualConfig {
 }
 
 impl ResidualConfig {
-    /// Checks the values; `source` names the file in errors.
-    pub fn validate(&self) -> Result<()> {
+    /// Checks the values against a phase of `steps_per_phase` physics
+    /// steps (the `[physics]` rate's).
+    pub fn validate(&self, steps_per_phase: usize) -> Result<()> {
         if self.phase_policy.as_os_str().is_empty() {
             bail!("phase_policy is missing: the exported phase-level policy that plans each phase");
         }
-        if self.control_steps == 0 || !SAMPLES_PER_PHASE.is_multiple_of(self.control_steps) {
+        if self.control_steps == 0 || !steps_per_phase.is_multiple_of(self.control_steps) {
             bail!(
-                "control_steps = {} must divide the phase's {SAMPLES_PER_PHASE} physics steps (e.g. 4, 6, 9, 12)",
+                "control_steps = {} must divide the phase's {steps_per_phase} physics steps (at 240 Hz, 180: e.g. 4, 6, 9, 12)",
                 self.control_steps
             );
         }
@@ -87,6 +87,7 @@ impl ResidualConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use robot::action::SAMPLES_PER_PHASE;
 
     #[test]
     fn bad_values_name_the_key() {
@@ -94,7 +95,18 @@ mod tests {
             phase_policy: "p".into(),
             ..ResidualConfig::default()
         };
-        assert!(good.validate().is_ok());
+        assert!(good.validate(SAMPLES_PER_PHASE).is_ok());
+        // 9 divides 180 (240 Hz) but not 90 (120 Hz)
+        let nine = ResidualConfig {
+            control_steps: 9,
+            ..good.clone()
+        };
+        assert!(nine.validate(180).is_ok());
+        let err = nine.validate(90).unwrap_err().to_string();
+        assert!(
+            err.contains("control_steps = 9 must divide the phase's 90 physics steps"),
+            "{err}"
+        );
         for (config, expected) in [
             (ResidualConfig::default(), "phase_policy is missing"),
             (
@@ -119,7 +131,7 @@ mod tests {
                 "offset_cost = -1",
             ),
         ] {
-            let err = config.validate().unwrap_err().to_string();
+            let err = config.validate(SAMPLES_PER_PHASE).unwrap_err().to_string();
             assert!(err.contains(expected), "{err}");
         }
     }

@@ -58,15 +58,30 @@ pub struct EvalReport {
     /// the `--task KEY=VALUE` settings over the scene's task that judged it
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub task_overrides: Vec<String>,
+    /// the physics rate the episodes ran at, Hz (written when it is not
+    /// the paper's 240)
+    #[serde(
+        default = "paper_step_rate_hz",
+        skip_serializing_if = "is_paper_step_rate_hz"
+    )]
+    pub step_rate_hz: u32,
     /// the aggregates
     pub summary: Summary,
     /// every episode, in seed order
     pub episodes: Vec<EpisodeRecord>,
 }
 
+fn paper_step_rate_hz() -> u32 {
+    robot::world_config::PAPER_STEP_RATE_HZ
+}
+
+fn is_paper_step_rate_hz(rate_hz: &u32) -> bool {
+    *rate_hz == paper_step_rate_hz()
+}
+
 /// A phase's simulated duration, s.
 fn phase_secs() -> f64 {
-    robot::action::SAMPLES_PER_PHASE as f64 * robot::DT_SECS
+    robot::action::PHASE_SECS
 }
 
 /// A file-name-safe form of a terrain spec or a path.
@@ -105,6 +120,9 @@ pub struct EvalRequest {
     pub stochastic: bool,
     /// worker threads [default: all cores]
     pub threads: Option<usize>,
+    /// run the physics at this rate, Hz, instead of the policy's (a policy
+    /// trained at 120 Hz judged at the paper's 240)
+    pub step_rate_hz: Option<u32>,
 }
 
 /// The setting every episode of an evaluation runs in: its terrain, and
@@ -138,6 +156,13 @@ impl<'a> EvalScene<'a> {
                 .map_or("the scene".to_string(), |p| p.display().to_string()),
         )?;
         policy.fit_scene(&mut task, &mut physics, request.config_path.as_deref())?;
+        if let Some(rate_hz) = request.step_rate_hz {
+            physics.step_rate_hz = rate_hz;
+            physics
+                .validate()
+                .map_err(|e| anyhow!("--step-rate-hz {rate_hz}: {e}"))?;
+            policy.check_step_rate(&physics, &format!("--step-rate-hz {rate_hz}"))?;
+        }
         task.max_phases = request.phases as usize;
         Ok(Self {
             registry,
@@ -146,6 +171,12 @@ impl<'a> EvalScene<'a> {
             task,
             physics,
         })
+    }
+
+    /// The physics every episode runs in (the policy's, or the rate
+    /// [`EvalRequest::step_rate_hz`] sets).
+    pub fn physics(&self) -> &WorldConfig {
+        &self.physics
     }
 
     /// Runs one episode of `policy` with `seed`: the world, start and
@@ -252,6 +283,7 @@ impl<'a> EvalScene<'a> {
             max_phases: request.phases as usize,
             stochastic: request.stochastic,
             task_overrides: request.task_overrides.clone(),
+            step_rate_hz: self.physics.step_rate_hz,
             summary,
             episodes,
         })

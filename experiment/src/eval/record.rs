@@ -306,6 +306,8 @@ pub struct EpisodeRecorder {
     foot_slip_m: f64,
     /// the robot's mass, kg (read in the first step)
     mass_kg: f64,
+    /// the world's physics step, s (read in the first step)
+    dt_secs: f64,
     /// on a terrain that changes by itself: the base heights around the
     /// first change
     response: Option<ResponseTrace>,
@@ -358,7 +360,7 @@ impl EpisodeRecorder {
             change_response: self
                 .response
                 .as_ref()
-                .and_then(|t| t.response(robot::DT_SECS)),
+                .and_then(|t| t.response(self.dt_secs)),
             phase_log: self.phase_log,
             by_terrain: self.by_terrain,
         }
@@ -397,9 +399,10 @@ impl PhaseObserver for EpisodeRecorder {
             .zip(world.joint_velocities_rad_per_s())
             .map(|(tau, qd)| (tau * qd).abs())
             .sum();
-        self.mechanical_energy_j += power_w * robot::DT_SECS;
+        self.mechanical_energy_j += power_w * world.dt_secs();
         if self.mass_kg == 0.0 {
             self.mass_kg = world.model().total_mass_kg();
+            self.dt_secs = world.dt_secs();
             self.response = world
                 .terrain()
                 .change_times_secs()
@@ -421,13 +424,13 @@ impl PhaseObserver for EpisodeRecorder {
             .zip(touching)
             .filter(|(_, touches)| *touches)
         {
-            self.foot_slip_m += sole.x.hypot(sole.y) * robot::DT_SECS;
+            self.foot_slip_m += sole.x.hypot(sole.y) * world.dt_secs();
         }
         if let Some(samples) = self.by_terrain.get_mut(label) {
             samples.add_step(
                 *swing,
                 step_in_phase,
-                robot::action::SAMPLES_PER_PHASE,
+                world.steps_per_phase(),
                 task.base_height_m(),
             );
         }

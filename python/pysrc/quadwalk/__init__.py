@@ -189,16 +189,25 @@ class QuadwalkVectorEnv(gym.vector.VectorEnv):
 
 def run_phase(controller: Controller, robot, action, state: dict, stop=None) -> tuple[dict, Any]:
     """One phase of a deployed policy: ``controller`` plans it from
-    ``action`` and the measured ``state``, then drives ``robot`` through its
-    240 Hz joint targets (``robot.step(targets)``, then ``robot.state()``:
-    ``Sim``, ``quadwalk.mujoco_scene.MujocoRobot`` or a real robot's
-    interface). ``stop(state)``, called after each step, ends the phase
+    ``action`` and the measured ``state``, then drives ``robot`` through the
+    phase's joint targets, one per step at the controller's rate (240 Hz
+    unless its policy trained at another): ``robot.step(targets)``, then
+    ``robot.state()`` (``Sim``, ``quadwalk.mujoco_scene.MujocoRobot`` or a
+    real robot's interface). ``stop(state)``, called after each step, ends the phase
     early when it returns something true (a fall's cause). Returns the last
     state and what ``stop`` returned (``None`` when the phase ran to its
-    end)."""
+    end). A robot with a ``dt_secs`` attribute (``Sim``, ``MujocoRobot``)
+    must step what the controller's step is (``control_step_secs``)."""
+    robot_dt_secs = getattr(robot, "dt_secs", None)
+    if robot_dt_secs is not None and abs(robot_dt_secs - controller.control_step_secs) > 1e-12:
+        raise ValueError(
+            f"the robot steps {robot_dt_secs} s but the controller plans steps of "
+            f"{controller.control_step_secs} s (its policy's [physics] step_rate_hz): "
+            "step the robot at the policy's rate"
+        )
     controller.plan_phase(action, state)
     stopped = None
-    for sample in range(1, Controller.samples_per_phase + 1):
+    for sample in range(1, controller.samples_per_phase + 1):
         targets = controller.joint_targets(sample)
         controller.record_step(state)
         robot.step(targets)

@@ -51,6 +51,9 @@ def _parse_terrain(spec: str) -> float | None:
 class MujocoRobot:
     """quadwalk's robot and ground in MuJoCo, stepped at quadwalk's 240 Hz."""
 
+    #: one step, s (what ``quadwalk.run_phase`` checks against the controller's)
+    dt_secs = 1.0 / 240.0
+
     def __init__(
         self,
         terrain: str = "rigid",
@@ -76,7 +79,7 @@ class MujocoRobot:
         self.max_pitch_deg = max_pitch_deg
         spec = mujoco.MjSpec.from_string(LAIKAGO_URDF)
         spec.body("chassis").add_freejoint()
-        spec.option.timestep = 1.0 / 240.0
+        spec.option.timestep = self.dt_secs
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
         for g in spec.geoms:
             g.contype, g.conaffinity = ROBOT

@@ -136,7 +136,7 @@ use crate::action::ACTION_SIZE;
 use crate::controller::{PhaseController, RobotState, feet_in_base_m, point_in_base};
 use crate::model::LegName;
 use crate::snapshot::StepSnapshot;
-use crate::world::{DT_SECS, World};
+use crate::world::World;
 
 /// Swing order of the four phases of a cycle.
 pub const SWING_ORDER: [LegName; 4] = [
@@ -312,7 +312,7 @@ impl Task {
         let goal_offset_m = self.draw_goal_offset_m();
         self.world.reset_terrain();
         self.world.reset_robot(start_xy_m, 0.0);
-        for _ in 0..(self.config.settle_secs / DT_SECS).round() as usize {
+        for _ in 0..(self.config.settle_secs / self.world.dt_secs()).round() as usize {
             self.world.step();
         }
         self.begin_episode_toward(goal_offset_m, obs);
@@ -707,6 +707,57 @@ pub(crate) mod tests {
             Some(ActionPrior::None)
         );
         assert_eq!(ActionPrior::from_name("crawl"), None);
+    }
+
+    /// At 120 Hz a phase is 90 steps of 1/120 s, 0.75 s as at 240 Hz,
+    /// and the crawl moves the base on 5 cm tiles as at 240 Hz: within
+    /// 1 cm along x over 12 phases (it crawls back 1.8-1.9 cm from this
+    /// start at both rates), its mean height within 2 mm.
+    #[test]
+    fn at_half_the_paper_rate_a_phase_lasts_as_long_and_the_crawl_moves_alike() {
+        let mut moved = Vec::new();
+        for step_rate_hz in [240, 120] {
+            let physics = WorldConfig {
+                step_rate_hz,
+                ..WorldConfig::default()
+            };
+            let world = crate::test_worlds::laikago_on("elastic:5cm", 3, [0.0, 0.0], physics);
+            let mut task = Task::new(world, TaskConfig::default(), 3);
+            let mut obs = vec![0.0; task.observation_size()];
+            task.reset(&mut obs);
+            let (x0, t0) = (
+                task.world().base_pose().translation.x,
+                task.world().time_secs(),
+            );
+            let mut height_sum_m = 0.0;
+            for phase in 0..12 {
+                let outcome = task.step_phase(&ScriptedCrawl::default().act(&task), &mut obs);
+                assert!(
+                    outcome.termination.is_none(),
+                    "{step_rate_hz} Hz phase {phase}"
+                );
+                assert_eq!(outcome.steps, step_rate_hz as usize * 3 / 4);
+                height_sum_m += outcome.mean_base_height_m;
+            }
+            let secs = task.world().time_secs() - t0;
+            assert!(
+                (secs - 12.0 * 0.75).abs() < 1e-9,
+                "{step_rate_hz} Hz: {secs} s"
+            );
+            moved.push((
+                task.world().base_pose().translation.x - x0,
+                height_sum_m / 12.0,
+            ));
+        }
+        let ((x240, h240), (x120, h120)) = (moved[0], moved[1]);
+        assert!(
+            (x240 - x120).abs() < 0.01,
+            "{x240} m at 240 Hz, {x120} m at 120 Hz"
+        );
+        assert!(
+            (h240 - h120).abs() < 0.002,
+            "{h240} m at 240 Hz, {h120} m at 120 Hz"
+        );
     }
 
     #[test]

@@ -8,7 +8,6 @@
 use nalgebra::Vector3;
 
 use super::{DistanceReward, PhaseOutcome, RewardTerms, Task, Termination};
-use crate::action::SAMPLES_PER_PHASE;
 use crate::controller::{PhasePlan, RobotState};
 use crate::snapshot::{NoObserver, PhaseObserver, PhaseStart};
 
@@ -17,8 +16,10 @@ use crate::snapshot::{NoObserver, PhaseObserver, PhaseStart};
 pub struct PhaseRun {
     /// the phase's plan (curves, swing leg, start pose)
     pub plan: PhasePlan,
-    /// the physics steps taken, 0 to [`SAMPLES_PER_PHASE`]
+    /// the physics steps taken, 0 to [`Self::steps_per_phase`]
     pub steps: usize,
+    /// the phase's physics steps (0.75 s at the world's rate)
+    pub steps_per_phase: usize,
     /// why the episode ended in this phase, once it has
     pub termination: Option<Termination>,
     goal_distance_prev_m: f64,
@@ -32,7 +33,7 @@ pub struct PhaseRun {
 impl PhaseRun {
     /// Whether the phase has ended (all its steps taken, or a fall).
     pub fn finished(&self) -> bool {
-        self.termination.is_some() || self.steps >= SAMPLES_PER_PHASE
+        self.termination.is_some() || self.steps >= self.steps_per_phase
     }
 }
 
@@ -94,6 +95,7 @@ impl Task {
         PhaseRun {
             plan,
             steps: 0,
+            steps_per_phase: self.world.steps_per_phase(),
             termination: None,
             goal_distance_prev_m,
             targets_rad: self.world.joint_targets_rad().to_vec(),
@@ -145,7 +147,7 @@ impl Task {
     /// order, in the base's target frame of that step), m: what a
     /// lower-level controller moves.
     pub fn planned_feet_m(&self, run: &PhaseRun) -> [Vector3<f64>; 4] {
-        let sample = (run.steps + 1).min(SAMPLES_PER_PHASE);
+        let sample = (run.steps + 1).min(run.steps_per_phase);
         self.controller.planned_feet_m(&run.plan, sample)
     }
 
@@ -274,7 +276,7 @@ mod tests {
             while stepped.step_in_phase(&mut run, None, &mut NoObserver) {
                 steps += 1;
             }
-            assert_eq!(steps + 1, SAMPLES_PER_PHASE);
+            assert_eq!(steps + 1, stepped.world().steps_per_phase());
             let b = stepped.end_phase(run, &mut obs_b, &mut NoObserver);
             assert_eq!(a.reward.to_bits(), b.reward.to_bits());
             assert_eq!(obs_a, obs_b);

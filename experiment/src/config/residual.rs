@@ -96,15 +96,15 @@ mod tests {
             ..ResidualConfig::default()
         };
         assert!(good.validate(SAMPLES_PER_PHASE).is_ok());
-        // 9 divides 180 (240 Hz) but not 90 (120 Hz)
-        let nine = ResidualConfig {
-            control_steps: 9,
+        // 12 divides 180 (240 Hz) but not 90 (120 Hz)
+        let twelve = ResidualConfig {
+            control_steps: 12,
             ..good.clone()
         };
-        assert!(nine.validate(180).is_ok());
-        let err = nine.validate(90).unwrap_err().to_string();
+        assert!(twelve.validate(180).is_ok());
+        let err = twelve.validate(90).unwrap_err().to_string();
         assert!(
-            err.contains("control_steps = 9 must divide the phase's 90 physics steps"),
+            err.contains("control_steps = 12 must divide the phase's 90 physics steps"),
             "{err}"
         );
         for (config, expected) in [

@@ -197,7 +197,7 @@ def run_phase(controller: Controller, robot, action, state: dict, stop=None) -> 
     early when it returns something true (a fall's cause). Returns the last
     state and what ``stop`` returned (``None`` when the phase ran to its
     end). A robot with a ``dt_secs`` attribute (``Sim``, ``MujocoRobot``)
-    must step what the controller's step is (``control_step_secs``)."""
+    must take steps as long as the controller's (``control_step_secs``)."""
     robot_dt_secs = getattr(robot, "dt_secs", None)
     if robot_dt_secs is not None and abs(robot_dt_secs - controller.control_step_secs) > 1e-12:
         raise ValueError(

@@ -42,7 +42,7 @@ use crate::task::{
     ActionPrior, FOOT_HISTORY_PHASES, ObservationConfig, SWING_ORDER, SwingHeightReference,
 };
 use crate::world::{World, WorldError, squat_rad_of};
-use crate::world_config::WorldConfig;
+use crate::world_config::{PAPER_STEP_RATE_HZ, WorldConfig, dt_secs_at, steps_per_phase_at};
 
 /// What the controller reads of the robot: the measured (or estimated)
 /// state, world frame unless named otherwise.
@@ -172,10 +172,8 @@ pub struct PhaseController {
     observation: ObservationConfig,
     action_prior: ActionPrior,
     swing_height_reference: SwingHeightReference,
-    /// control steps (physics steps) in a phase
-    steps_per_phase: usize,
-    /// one control step, s
-    dt_secs: f64,
+    /// control steps (physics steps) per second, Hz
+    step_rate_hz: u32,
     memory: Memory,
 }
 
@@ -204,7 +202,6 @@ impl PhaseController {
             legs[leg].forward([squat_rad[a], squat_rad[h], squat_rad[k]])
         });
         let feet = [Vector3::zeros(); 4];
-        let paper = WorldConfig::default();
         Self {
             legs,
             leg_joints,
@@ -213,8 +210,7 @@ impl PhaseController {
             observation,
             action_prior,
             swing_height_reference,
-            steps_per_phase: paper.steps_per_phase(),
-            dt_secs: paper.dt_secs(),
+            step_rate_hz: PAPER_STEP_RATE_HZ,
             memory: Memory {
                 phase: 0,
                 phase_start_feet: [feet; FOOT_HISTORY_PHASES],
@@ -260,8 +256,7 @@ impl PhaseController {
             action_prior,
             swing_height_reference,
         );
-        controller.steps_per_phase = world.steps_per_phase();
-        controller.dt_secs = world.dt_secs();
+        controller.step_rate_hz = world.step_rate_hz();
         controller
     }
 
@@ -275,20 +270,19 @@ impl PhaseController {
             ..WorldConfig::default()
         };
         physics.validate().ok()?;
-        self.steps_per_phase = physics.steps_per_phase();
-        self.dt_secs = physics.dt_secs();
+        self.step_rate_hz = step_rate_hz;
         Some(self)
     }
 
     /// Control steps in a phase (180 at the paper's
-    /// [`crate::world_config::PAPER_STEP_RATE_HZ`]).
+    /// [`PAPER_STEP_RATE_HZ`]).
     pub fn steps_per_phase(&self) -> usize {
-        self.steps_per_phase
+        steps_per_phase_at(self.step_rate_hz)
     }
 
     /// One control step, s.
     pub fn dt_secs(&self) -> f64 {
-        self.dt_secs
+        dt_secs_at(self.step_rate_hz)
     }
 
     /// Observation values.
@@ -425,7 +419,7 @@ impl PhaseController {
         }
         if c.foot_velocity {
             for (p, q) in now.iter().zip(&memory.feet_1_step_ago) {
-                out.extend(((p - q) / self.dt_secs).iter());
+                out.extend(((p - q) / self.dt_secs()).iter());
             }
         }
         let goal = state.in_base(self.observed_goal_xy_m(state, goal_xy_m));
@@ -568,7 +562,7 @@ impl PhaseController {
     /// the base's target frame of that sample, m: the points the IK of
     /// [`Self::joint_targets`] solves for.
     pub fn planned_feet_m(&self, plan: &PhasePlan, sample: usize) -> [Vector3<f64>; 4] {
-        let t = sample as f64 / self.steps_per_phase as f64;
+        let t = sample as f64 / self.steps_per_phase() as f64;
         let curves = &plan.curves;
         let rpy = curves.base_orientation.at(t);
         let offset = Isometry3::from_parts(

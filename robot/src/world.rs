@@ -295,6 +295,11 @@ impl World {
         }
     }
 
+    /// Physics steps per second, Hz (the config's `step_rate_hz`).
+    pub fn step_rate_hz(&self) -> u32 {
+        self.config.step_rate_hz
+    }
+
     /// The physics step, s (1 / the config's `step_rate_hz`).
     pub fn dt_secs(&self) -> f64 {
         self.config.dt_secs()

@@ -119,8 +119,20 @@ pub const PAPER_STEP_RATE_HZ: u32 = 240;
 /// paper's (45 to 720 steps a phase).
 pub const STEP_RATE_RANGE_HZ: std::ops::RangeInclusive<u32> = 60..=960;
 
-fn is_paper_step_rate(rate_hz: &u32) -> bool {
+/// Whether `rate_hz` is the paper's rate (serde's test for leaving the
+/// key out of a file).
+pub fn is_paper_step_rate(rate_hz: &u32) -> bool {
     *rate_hz == PAPER_STEP_RATE_HZ
+}
+
+/// The physics step at `step_rate_hz`, s: 1 / rate.
+pub fn dt_secs_at(step_rate_hz: u32) -> f64 {
+    1.0 / f64::from(step_rate_hz)
+}
+
+/// Physics steps in a 0.75 s phase at `step_rate_hz`: 0.75 x rate.
+pub fn steps_per_phase_at(step_rate_hz: u32) -> usize {
+    step_rate_hz as usize * 3 / 4
 }
 
 impl Default for WorldConfig {
@@ -200,13 +212,13 @@ impl WorldConfig {
 
     /// The physics step, s: 1 / `step_rate_hz`.
     pub fn dt_secs(&self) -> f64 {
-        1.0 / f64::from(self.step_rate_hz)
+        dt_secs_at(self.step_rate_hz)
     }
 
     /// Physics steps (IK solves, control points) in a 0.75 s phase:
     /// 0.75 x `step_rate_hz`.
     pub fn steps_per_phase(&self) -> usize {
-        self.step_rate_hz as usize * 3 / 4
+        steps_per_phase_at(self.step_rate_hz)
     }
 }
 

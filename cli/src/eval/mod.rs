@@ -289,11 +289,11 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
         report.first_seed,
         report.first_seed + s.episodes as u64 - 1
     );
-    if report.step_rate_hz != robot::world_config::PAPER_STEP_RATE_HZ {
+    if !robot::world_config::is_paper_step_rate(&report.step_rate_hz) {
         out!(
             "physics         {} Hz ({} steps a phase; the paper's: 240)",
             report.step_rate_hz,
-            report.step_rate_hz * 3 / 4
+            robot::world_config::steps_per_phase_at(report.step_rate_hz)
         );
     }
     out!(

@@ -62,7 +62,7 @@ pub struct EvalReport {
     /// the paper's 240)
     #[serde(
         default = "paper_step_rate_hz",
-        skip_serializing_if = "is_paper_step_rate_hz"
+        skip_serializing_if = "robot::world_config::is_paper_step_rate"
     )]
     pub step_rate_hz: u32,
     /// the aggregates
@@ -73,10 +73,6 @@ pub struct EvalReport {
 
 fn paper_step_rate_hz() -> u32 {
     robot::world_config::PAPER_STEP_RATE_HZ
-}
-
-fn is_paper_step_rate_hz(rate_hz: &u32) -> bool {
-    *rate_hz == paper_step_rate_hz()
 }
 
 /// A phase's simulated duration, s.

@@ -118,21 +118,22 @@ impl TrainObserver for Terminal {
         levels: Option<&TerrainLevels>,
         learning_rate: Option<f64>,
         task_overrides: &toml::Table,
+        physics_overrides: &toml::Table,
     ) {
         let rate = learning_rate.map_or(String::new(), |r| format!(", learning rate {r:e}"));
-        let task = if task_overrides.is_empty() {
-            String::new()
-        } else {
-            let keys: Vec<String> = task_overrides
-                .iter()
-                .map(|(k, v)| format!("{k} = {v}"))
-                .collect();
-            format!(", task: {}", keys.join(", "))
+        let keys = |label: &str, table: &toml::Table| {
+            if table.is_empty() {
+                return String::new();
+            }
+            let keys: Vec<String> = table.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+            format!(", {label}: {}", keys.join(", "))
         };
         eprintln!(
-            "curriculum stage {}: {}{rate}{task}",
+            "curriculum stage {}: {}{rate}{}{}",
             stage + 1,
-            terrain_label(terrain, levels)
+            terrain_label(terrain, levels),
+            keys("task", task_overrides),
+            keys("physics", physics_overrides)
         );
     }
 

@@ -97,11 +97,11 @@ impl Policy {
                 .decide_stages_from(&metrics, learner.iteration())
                 .with_context(|| format!("policy {arg}"))?;
         }
-        // the task of the stage the policy's last iteration trained in
-        let task = config
-            .task_at(learner.iteration().saturating_sub(1))
-            .clone();
-        let physics = config.physics;
+        // the task and physics of the stage the policy's last iteration
+        // trained in
+        let last = learner.iteration().saturating_sub(1);
+        let task = config.task_at(last).clone();
+        let physics = config.physics_at(last).clone();
         if let Some(mut residual) = config.residual {
             crate::residual::phase_policy_seen_from(&mut residual, path);
             if learner.obs_size() != crate::residual::OBSERVATION_SIZE

@@ -143,9 +143,9 @@ struct Residual {
 }
 
 impl TaskEnv {
-    /// `experiment.train.envs` worlds on `terrain` with the experiment's
-    /// task and physics, or with `levels`, world `i` on the terrain of its
-    /// level `levels.1[i]`; world `i`'s terrain draw is seeded by
+    /// `experiment.train.envs` worlds on `terrain` with `task` and
+    /// `physics` (a stage's), or with `levels`, world `i` on the terrain of
+    /// its level `levels.1[i]`; world `i`'s terrain draw is seeded by
     /// `(experiment.train.seed, i)`. Stepped on `threads` threads.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
@@ -153,6 +153,7 @@ impl TaskEnv {
         terrain: &TerrainSpec,
         levels: Option<(&TerrainLevels, Vec<usize>)>,
         task: &TaskConfig,
+        physics: &WorldConfig,
         model: &Arc<RobotModel>,
         experiment: &Experiment,
         threads: usize,
@@ -192,7 +193,7 @@ impl TaskEnv {
             terrain: terrain.clone(),
             model: model.clone(),
             task_config: task.clone(),
-            physics: experiment.physics.clone(),
+            physics: physics.clone(),
             terrain_seed: seed,
             pool,
             interrupted,
@@ -666,6 +667,7 @@ mod tests {
             &experiment.terrain,
             None,
             &experiment.task,
+            &experiment.physics,
             &Arc::new(RobotModel::laikago()),
             &experiment,
             1,
@@ -735,6 +737,7 @@ mod tests {
             &experiment.terrain,
             Some((levels, vec![0, 1, 2])),
             &experiment.task,
+            &experiment.physics,
             &Arc::new(RobotModel::laikago()),
             &experiment,
             2,

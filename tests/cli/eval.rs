@@ -317,6 +317,84 @@ fn a_policy_trained_at_120_hz_evaluates_at_its_rate_or_the_one_asked() {
     assert!(err.contains("--step-rate-hz"), "{err}");
 }
 
+/// A curriculum whose second stage steps the worlds at 120 Hz
+/// (`[curriculum.physics]`): the stage's start says so, a checkpoint of
+/// stage 1 evaluates at 240 Hz and one of stage 2 at 120 Hz (a policy runs
+/// at the physics of its last iteration), and a fork from a run whose
+/// first iteration stepped at another rate is refused, naming it.
+#[test]
+fn a_stage_that_sets_its_physics_trains_and_hands_its_rate_to_the_policy() {
+    let dir = scratch_dir("stage-physics");
+    let staged = dir.join("staged.toml");
+    let stages = "[[curriculum]]\nterrain = \"rigid\"\niterations = 1\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 1\n\n[curriculum.physics]\nstep_rate_hz = 120\n";
+    std::fs::write(&staged, format!("{}{stages}", super::train::TINY)).unwrap();
+    let run = dir.join("run");
+    let config = s(&staged);
+    let log = super::train::ok(&[
+        "train",
+        "--config",
+        config,
+        "--run-dir",
+        s(&run),
+        "--rerun",
+        "off",
+    ]);
+    assert!(
+        log.contains("curriculum stage 2: rigid, physics: step_rate_hz = 120"),
+        "{log}"
+    );
+    let rate_of = |policy: &Path, out: &str| {
+        let report = eval_json(
+            &[
+                "--policy",
+                s(policy),
+                "--terrain",
+                "rigid",
+                "--episodes",
+                "1",
+                "--phases",
+                "2",
+            ],
+            &dir.join(out),
+        );
+        report["step_rate_hz"].as_u64().unwrap_or(240)
+    };
+    assert_eq!(
+        rate_of(&run.join("checkpoints/iter-000001"), "stage-1"),
+        240
+    );
+    assert_eq!(rate_of(&run, "stage-2"), 120);
+    // a run at 120 Hz throughout did not train iteration 1 as this config
+    let all_120 = dir.join("all-120.toml");
+    std::fs::write(
+        &all_120,
+        super::train::TINY.replace("[ppo]", "[physics]\nstep_rate_hz = 120\n\n[ppo]"),
+    )
+    .unwrap();
+    let other = dir.join("other");
+    train_tiny(&all_120, &other, "1");
+    let refused = dir.join("refused");
+    let err = failure(
+        &[
+            "train",
+            "--config",
+            config,
+            "--run-dir",
+            s(&refused),
+            "--rerun",
+            "off",
+            "--fork",
+            s(&other.join("checkpoints/iter-000001")),
+        ],
+        1,
+    );
+    assert!(
+        err.contains("iteration 1's [physics] settings")
+            && err.contains("step_rate_hz: 240 against step_rate_hz: 120"),
+        "{err}"
+    );
+}
+
 #[test]
 fn bad_eval_input_is_refused_with_what_is_wrong() {
     let err = failure(&["eval", "--policy", "no/such/run"], 1);

@@ -71,7 +71,7 @@ fn training_fails(config: &Path, run: &Path) -> String {
 }
 
 /// Runs `quadwalk ARGS`, which must succeed; returns its stderr.
-fn ok(args: &[&str]) -> String {
+pub(crate) fn ok(args: &[&str]) -> String {
     let out = quadwalk(args);
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(out.status.success(), "quadwalk {args:?}: {stderr}");

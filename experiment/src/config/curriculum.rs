@@ -1,16 +1,17 @@
 //! `[[curriculum]]`: stages in order, each with its terrain (or its
 //! `[curriculum.levels]`, a terrain per world), iterations and optionally
-//! its learning rate and `[curriculum.task]` keys; and what an experiment
-//! trains at a given iteration.
+//! its learning rate, `[curriculum.task]` and `[curriculum.physics]` keys;
+//! and what an experiment trains at a given iteration.
 
 use anyhow::{Context, Result, anyhow, bail};
+use robot::WorldConfig;
 use robot::task::TaskConfig;
 use serde::Deserialize;
 use terrain_plugins::{Registry, TerrainSpec};
 
 use super::Experiment;
 use super::advance::{Advance, AdvanceSection};
-use super::defaults::resolve_task;
+use super::defaults::{overlay, resolve_task};
 use super::levels::{LevelsSection, TerrainLevels};
 
 /// One curriculum stage.
@@ -37,6 +38,12 @@ pub struct Stage {
     /// the task of this stage: `[task]` with the overrides on top (`None`:
     /// `[task]`'s)
     pub task: Option<TaskConfig>,
+    /// the stage's `[curriculum.physics]` keys, as written (empty: none)
+    pub physics_overrides: toml::Table,
+    /// the physics of this stage's worlds: `[physics]` with the overrides on
+    /// top (`None`: `[physics]`'s), e.g. a coarser step (`step_rate_hz`)
+    /// for the easy levels and the paper's for the ending
+    pub physics: Option<WorldConfig>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -49,6 +56,8 @@ struct StageSection {
     learning_rate: Option<f64>,
     #[serde(default)]
     task: Option<toml::Table>,
+    #[serde(default)]
+    physics: Option<toml::Table>,
     #[serde(default)]
     advance: Option<AdvanceSection>,
     #[serde(default)]
@@ -164,6 +173,23 @@ impl Experiment {
     /// `[task]`.
     pub(super) fn task_of<'a>(&'a self, stage: &'a Stage) -> &'a TaskConfig {
         stage.task.as_ref().unwrap_or(&self.task)
+    }
+
+    /// The physics of 0-based iteration `iteration`'s worlds: its curriculum
+    /// stage's when the stage sets `[curriculum.physics]` keys, else
+    /// `[physics]`.
+    pub fn physics_at(&self, iteration: u64) -> &WorldConfig {
+        if self.curriculum.is_empty() {
+            return &self.physics;
+        }
+        let (stage, _) = self.terrain_at(iteration);
+        self.physics_of(&self.curriculum[stage])
+    }
+
+    /// A stage's physics: its own where it sets `[curriculum.physics]`
+    /// keys, else `[physics]`.
+    pub(super) fn physics_of<'a>(&'a self, stage: &'a Stage) -> &'a WorldConfig {
+        stage.physics.as_ref().unwrap_or(&self.physics)
     }
 
     /// The learning rate iteration `iteration` trains at: the stage's, else
@@ -283,10 +309,12 @@ impl Experiment {
 }
 
 /// Reads `[[curriculum]]` (the stages' tasks over `task_table`, the
-/// `[task]` section); `source` names the file in errors.
+/// `[task]` section, and their physics over `physics`, the `[physics]`
+/// section resolved); `source` names the file in errors.
 pub(super) fn curriculum_from_doc(
     doc: &toml::Table,
     task_table: &toml::Table,
+    physics: &WorldConfig,
     source: &str,
     registry: &Registry,
 ) -> Result<Vec<Stage>> {
@@ -327,6 +355,20 @@ pub(super) fn curriculum_from_doc(
                     )
                 })?)
             };
+            let physics_overrides = stage.physics.unwrap_or_default();
+            let physics = if physics_overrides.is_empty() {
+                None
+            } else {
+                let stage_physics: WorldConfig = overlay(physics, Some(&physics_overrides))
+                    .and_then(|p: WorldConfig| p.validate().map(|()| p).map_err(|e| anyhow!("{e}")))
+                    .map_err(|e| {
+                        anyhow!(
+                            "config {source} [[curriculum]] stage {} [curriculum.physics]: {e}",
+                            k + 1
+                        )
+                    })?;
+                Some(stage_physics)
+            };
             let advance = stage
                 .advance
                 .map(|rule| rule.resolve(stage.iterations))
@@ -364,6 +406,8 @@ pub(super) fn curriculum_from_doc(
                 learning_rate: stage.learning_rate,
                 task_overrides,
                 task,
+                physics_overrides,
+                physics,
             })
         })
         .collect()

@@ -7,9 +7,9 @@ impl Experiment {
     /// Where this experiment's first `iterations` iterations would differ
     /// from `other`'s (`None`: they are the same training, so a checkpoint
     /// of `other` at `iterations` is where this experiment would be too).
-    /// Compared: the learner and its settings, the physics, the number of
-    /// worlds and the seed, and for every iteration before `iterations` its
-    /// terrain (and terrain levels), task and learning rate. Not compared: what does not change
+    /// Compared: the learner and its settings, the number of worlds and the
+    /// seed, and for every iteration before `iterations` its terrain (and
+    /// terrain levels), physics, task and learning rate. Not compared: what does not change
     /// the training (checkpoint cadence, Rerun environments, the stages'
     /// layout beyond what each iteration runs). Stages that move on when
     /// ready are compared where the run's history ended them: both
@@ -27,12 +27,6 @@ impl Experiment {
                 "the [{}] settings: {}",
                 self.algo.table,
                 debug_difference(&self.learner(), &other.learner())
-            ));
-        }
-        if self.physics != other.physics {
-            return Some(format!(
-                "the [physics] settings: {}",
-                debug_difference(&self.physics, &other.physics)
             ));
         }
         if self.train.envs != other.train.envs {
@@ -70,6 +64,13 @@ impl Experiment {
             let (a, b) = (self.terrain_at(i).1, other.terrain_at(i).1);
             if a != b {
                 return Some(format!("iteration {}'s terrain: {a} against {b}", i + 1));
+            }
+            if self.physics_at(i) != other.physics_at(i) {
+                return Some(format!(
+                    "iteration {}'s [physics] settings: {}",
+                    i + 1,
+                    debug_difference(self.physics_at(i), other.physics_at(i))
+                ));
             }
             if self.levels_at(i) != other.levels_at(i) {
                 return Some(format!(

@@ -184,7 +184,16 @@ impl Experiment {
             Some(toml::Value::Table(table)) => table.clone(),
             Some(_) => bail!("config {source} [task]: must be a table"),
         };
-        let curriculum = curriculum_from_doc(&doc, &task_table, source, registry)?;
+        let physics: WorldConfig = match doc.get("physics") {
+            None => WorldConfig::default(),
+            Some(toml::Value::Table(table)) => overlay(&WorldConfig::default(), Some(table))
+                .map_err(|e| anyhow!("config {source} [physics]: {e}"))?,
+            Some(_) => bail!("config {source} [physics]: must be a table"),
+        };
+        physics
+            .validate()
+            .map_err(|e| anyhow!("config {source} [physics]: {e}"))?;
+        let curriculum = curriculum_from_doc(&doc, &task_table, &physics, source, registry)?;
         let terrain = match (doc.get("terrain"), curriculum.first()) {
             (None, Some(first)) => first.terrain.clone(),
             _ => terrain_from_table(&doc, source, registry)?,
@@ -220,15 +229,6 @@ impl Experiment {
             .validate()
             .with_context(|| format!("config {source} [train]"))?;
         let task = resolve_task(&task_table).map_err(|e| anyhow!("config {source} [task]: {e}"))?;
-        let physics: WorldConfig = match doc.get("physics") {
-            None => WorldConfig::default(),
-            Some(toml::Value::Table(table)) => overlay(&WorldConfig::default(), Some(table))
-                .map_err(|e| anyhow!("config {source} [physics]: {e}"))?,
-            Some(_) => bail!("config {source} [physics]: must be a table"),
-        };
-        physics
-            .validate()
-            .map_err(|e| anyhow!("config {source} [physics]: {e}"))?;
         let residual = match doc.get("residual") {
             None => None,
             Some(value) => {
@@ -239,6 +239,18 @@ impl Experiment {
                 residual
                     .validate(physics.steps_per_phase())
                     .with_context(|| format!("config {source} [residual]"))?;
+                for (k, stage) in curriculum.iter().enumerate() {
+                    if let Some(stage_physics) = &stage.physics {
+                        residual
+                            .validate(stage_physics.steps_per_phase())
+                            .with_context(|| {
+                                format!(
+                                    "config {source} [residual] in [[curriculum]] stage {}'s physics",
+                                    k + 1
+                                )
+                            })?;
+                    }
+                }
                 Some(residual)
             }
         };
@@ -365,6 +377,12 @@ impl Experiment {
                     text.push_str(&format!("\n[curriculum.task.{name}]\n"));
                     text.push_str(&toml::to_string(&table).expect("a table serialises"));
                 }
+            }
+            if !stage.physics_overrides.is_empty() {
+                text.push_str("\n[curriculum.physics]\n");
+                text.push_str(
+                    &toml::to_string(&stage.physics_overrides).expect("a table serialises"),
+                );
             }
         }
         if let Some(residual) = &self.residual {
@@ -1024,6 +1042,87 @@ mod tests {
             assert!(
                 err.contains(expected) && err.contains("p.toml [physics]"),
                 "{text:?} gave {err:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_stage_sets_physics_keys_over_the_physics_section() {
+        // the levels at 120 Hz, the ending at [physics]'s 240 Hz with 4
+        // solver iterations
+        let text = "[physics]\nsubsteps = 4\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[curriculum.physics]\nstep_rate_hz = 120\n\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n";
+        let e = Experiment::from_toml_builtin(text, "c.toml").unwrap();
+        let early = e.physics_at(0);
+        assert_eq!(early.step_rate_hz, 120);
+        assert_eq!(early.steps_per_phase(), 90);
+        assert_eq!(early.solver_iterations, 4, "[physics]'s other keys stand");
+        assert_eq!(e.physics_at(2), early);
+        assert_eq!(e.physics_at(3), &e.physics);
+        assert_eq!(e.physics_at(3).step_rate_hz, 240);
+        assert_eq!(e.physics_at(99), &e.physics);
+        // the resolved file keeps the stage's keys as written and parses back
+        let resolved = e.to_toml();
+        assert!(
+            resolved.contains("[curriculum.physics]\nstep_rate_hz = 120\n"),
+            "{resolved}"
+        );
+        assert_eq!(
+            Experiment::from_toml_builtin(&resolved, "resolved").unwrap(),
+            e
+        );
+        // a fork is the same training up to the stage whose physics differ
+        let all_240 = Experiment::from_toml_builtin(
+            "[physics]\nsubsteps = 4\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n",
+            "d.toml",
+        )
+        .unwrap();
+        let difference = e.differs_before(&all_240, 1).unwrap();
+        assert!(
+            difference.contains("iteration 1's [physics] settings")
+                && difference.contains("step_rate_hz: 120 against step_rate_hz: 240"),
+            "{difference}"
+        );
+        let ends_at_120 = Experiment::from_toml_builtin(
+            &format!("{text}\n[curriculum.physics]\nstep_rate_hz = 120\n"),
+            "f.toml",
+        )
+        .unwrap();
+        assert_eq!(e.differs_before(&ends_at_120, 3), None);
+        assert!(
+            e.differs_before(&ends_at_120, 4)
+                .unwrap()
+                .starts_with("iteration 4's [physics] settings"),
+        );
+        for (stage_keys, expected) in [
+            (
+                "[curriculum.physics]\nstep_rate_hz = 130\n",
+                "stage 2 [curriculum.physics]: step_rate_hz must be a multiple of 4",
+            ),
+            (
+                "[curriculum.physics]\nstep_rate = 120\n",
+                "stage 2 [curriculum.physics]: unknown field `step_rate`",
+            ),
+            (
+                "[curriculum.physics]\nsubsteps = 0\n",
+                "stage 2 [curriculum.physics]: substeps must be in 1..=64, got 0",
+            ),
+            (
+                // a residual acts every control_steps physics steps: 12
+                // divides the 240 Hz phase's 180, not the 120 Hz one's 90
+                "[curriculum.physics]\nstep_rate_hz = 120\n\n[residual]\nphase_policy = \"p\"\ncontrol_steps = 12\n",
+                "[residual] in [[curriculum]] stage 2's physics: control_steps = 12 must divide the phase's 90 physics steps",
+            ),
+        ] {
+            let text = format!(
+                "[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n{stage_keys}"
+            );
+            let err = format!(
+                "{:#}",
+                Experiment::from_toml_builtin(&text, "c.toml").unwrap_err()
+            );
+            assert!(
+                err.contains(expected) && err.contains("c.toml"),
+                "{stage_keys:?} gave {err:?}"
             );
         }
     }

@@ -84,6 +84,7 @@ pub trait TrainObserver {
         _levels: Option<&TerrainLevels>,
         _learning_rate: Option<f64>,
         _task_overrides: &toml::Table,
+        _physics_overrides: &toml::Table,
     ) {
     }
     /// A stage's `[curriculum.advance]` rule was reached after `iterations`
@@ -177,7 +178,7 @@ pub fn train(
     let latest = run_dir.join(learn::checkpoint::LATEST_LINK);
 
     // the worlds of 0-based iteration `iteration`: its stage's terrain (or
-    // each world's level, `world_levels`) and task
+    // each world's level, `world_levels`), task and physics
     let build_env = |experiment: &Experiment, iteration, world_levels: &[usize]| {
         TaskEnv::new(
             registry,
@@ -186,6 +187,7 @@ pub fn train(
                 .levels_at(iteration)
                 .map(|levels| (levels, world_levels.to_vec())),
             experiment.task_at(iteration),
+            experiment.physics_at(iteration),
             model,
             experiment,
             threads,
@@ -252,6 +254,7 @@ pub fn train(
                 experiment.levels_at(iteration),
                 stage_rate,
                 &experiment.curriculum[stage].task_overrides,
+                &experiment.curriculum[stage].physics_overrides,
             );
         }
         // a stage's own learning rate (set every iteration, so a resume

@@ -99,8 +99,14 @@ impl TrainObserver for Terminal {
             );
         }
         self.step_unit = start.step_unit;
+        let rate = start.physics.step_rate_hz;
+        let physics = if robot::world_config::is_paper_step_rate(&rate) {
+            String::new()
+        } else {
+            format!(", physics at {rate} Hz")
+        };
         eprintln!(
-            "training ({}) on {} with {} environments x {} {} per iteration, {} threads; run directory {}",
+            "training ({}) on {}{physics} with {} environments x {} {} per iteration, {} threads; run directory {}",
             start.algo,
             terrain_label(start.terrain, start.levels),
             start.envs,

@@ -276,7 +276,21 @@ fn a_policy_trained_at_120_hz_evaluates_at_its_rate_or_the_one_asked() {
     )
     .unwrap();
     let run = dir.join("run");
-    train_tiny(&config, &run, "1");
+    let log = super::train::ok(&[
+        "train",
+        "--config",
+        s(&config),
+        "--run-dir",
+        s(&run),
+        "--iterations",
+        "1",
+        "--rerun",
+        "off",
+    ]);
+    assert!(
+        log.contains("training (ppo) on rigid, physics at 120 Hz with 2 environments"),
+        "{log}"
+    );
     let saved = std::fs::read_to_string(run.join("config.toml")).unwrap();
     assert!(saved.contains("step_rate_hz = 120"), "{saved}");
     let args = [
@@ -340,7 +354,8 @@ fn a_stage_that_sets_its_physics_trains_and_hands_its_rate_to_the_policy() {
         "off",
     ]);
     assert!(
-        log.contains("curriculum stage 2: rigid, physics: step_rate_hz = 120"),
+        log.contains("training (ppo) on rigid with")
+            && log.contains("curriculum stage 2: rigid, physics: step_rate_hz = 120"),
         "{log}"
     );
     let rate_of = |policy: &Path, out: &str| {

@@ -23,7 +23,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use learn::checkpoint::{remove_partial_saves, write_file_atomically};
 use learn::{Algorithm, IterationStats, VecEnv};
-use robot::RobotModel;
+use robot::{RobotModel, WorldConfig};
 use terrain_plugins::{Registry, TerrainSpec};
 use viz::RolloutLogger;
 
@@ -51,6 +51,9 @@ pub struct RunStart<'a> {
     pub step_unit: &'static str,
     /// threads stepping the worlds
     pub threads: usize,
+    /// the first iteration's physics (its stage's, with
+    /// `[curriculum.physics]`)
+    pub physics: &'a WorldConfig,
     /// where the run writes
     pub run_dir: &'a std::path::Path,
     /// a fork: the checkpoint it went on from and its iteration
@@ -224,6 +227,7 @@ pub fn train(
             "phases"
         },
         threads,
+        physics: experiment.physics_at(start_iteration),
         run_dir: &run_dir,
         forked_from: fork.as_deref().map(|c| (c, start_iteration)),
     });

@@ -263,18 +263,25 @@ fn a_trained_policy_evaluates_like_it_rolls_out_and_misfits_are_refused() {
     );
 }
 
-/// A policy trained at 120 Hz carries its rate into its checkpoint and
-/// evaluates at it; `--step-rate-hz 240` judges it at the paper's rate
-/// (eval.json says which); a rate a world cannot step at is refused.
-#[test]
-fn a_policy_trained_at_120_hz_evaluates_at_its_rate_or_the_one_asked() {
-    let dir = scratch_dir("eval-step-rate");
+/// The tiny config with its physics at 120 Hz, written to
+/// `dir/tiny-120.toml`.
+fn tiny_at_120_hz(dir: &Path) -> std::path::PathBuf {
     let config = dir.join("tiny-120.toml");
     std::fs::write(
         &config,
         super::train::TINY.replace("[ppo]", "[physics]\nstep_rate_hz = 120\n\n[ppo]"),
     )
     .unwrap();
+    config
+}
+
+/// A policy trained at 120 Hz carries its rate into its checkpoint and
+/// evaluates at it; `--step-rate-hz 240` judges it at the paper's rate
+/// (eval.json says which); a rate a world cannot step at is refused.
+#[test]
+fn a_policy_trained_at_120_hz_evaluates_at_its_rate_or_the_one_asked() {
+    let dir = scratch_dir("eval-step-rate");
+    let config = tiny_at_120_hz(&dir);
     let run = dir.join("run");
     let log = super::train::ok(&[
         "train",
@@ -380,12 +387,7 @@ fn a_stage_that_sets_its_physics_trains_and_hands_its_rate_to_the_policy() {
     );
     assert_eq!(rate_of(&run, "stage-2"), 120);
     // a run at 120 Hz throughout did not train iteration 1 as this config
-    let all_120 = dir.join("all-120.toml");
-    std::fs::write(
-        &all_120,
-        super::train::TINY.replace("[ppo]", "[physics]\nstep_rate_hz = 120\n\n[ppo]"),
-    )
-    .unwrap();
+    let all_120 = tiny_at_120_hz(&dir);
     let other = dir.join("other");
     train_tiny(&all_120, &other, "1");
     let refused = dir.join("refused");

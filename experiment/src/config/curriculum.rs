@@ -11,7 +11,7 @@ use terrain_plugins::{Registry, TerrainSpec};
 
 use super::Experiment;
 use super::advance::{Advance, AdvanceSection};
-use super::defaults::{overlay, resolve_task};
+use super::defaults::{resolve_physics, resolve_task};
 use super::levels::{LevelsSection, TerrainLevels};
 
 /// One curriculum stage.
@@ -359,15 +359,12 @@ pub(super) fn curriculum_from_doc(
             let physics = if physics_overrides.is_empty() {
                 None
             } else {
-                let stage_physics: WorldConfig = overlay(physics, Some(&physics_overrides))
-                    .and_then(|p: WorldConfig| p.validate().map(|()| p).map_err(|e| anyhow!("{e}")))
-                    .map_err(|e| {
-                        anyhow!(
-                            "config {source} [[curriculum]] stage {} [curriculum.physics]: {e}",
-                            k + 1
-                        )
-                    })?;
-                Some(stage_physics)
+                Some(resolve_physics(physics, &physics_overrides).map_err(|e| {
+                    anyhow!(
+                        "config {source} [[curriculum]] stage {} [curriculum.physics]: {e}",
+                        k + 1
+                    )
+                })?)
             };
             let advance = stage
                 .advance

@@ -5,6 +5,7 @@
 use anyhow::{Result, anyhow};
 use learn::registry::Registration;
 use learn::{PpoConfig, Settings, SettingsValue};
+use robot::WorldConfig;
 use robot::task::{BalanceTerms, DistanceReward, TaskConfig};
 use serde::Serialize;
 
@@ -65,4 +66,15 @@ pub(super) fn resolve_task(table: &toml::Table) -> Result<TaskConfig, String> {
     let task: TaskConfig = overlay(&default_task(), Some(table)).map_err(|e| e.to_string())?;
     task.validate().map_err(|e| e.to_string())?;
     Ok(task)
+}
+
+/// `base` with `table`'s `[physics]` keys on top, checked: the `[physics]`
+/// section over the defaults, or a stage's `[curriculum.physics]` over it.
+pub(super) fn resolve_physics(
+    base: &WorldConfig,
+    table: &toml::Table,
+) -> Result<WorldConfig, String> {
+    let physics: WorldConfig = overlay(base, Some(table)).map_err(|e| e.to_string())?;
+    physics.validate().map_err(|e| e.to_string())?;
+    Ok(physics)
 }

@@ -97,7 +97,7 @@ pub use task_overrides::apply_task_overrides;
 pub use train_settings::TrainSettings;
 
 use curriculum::curriculum_from_doc;
-use defaults::{overlay, resolve_learner, resolve_task};
+use defaults::{resolve_learner, resolve_physics, resolve_task};
 use terrain_table::terrain_from_table;
 
 /// The sections an experiment file may have: the fixed ones and every
@@ -184,15 +184,12 @@ impl Experiment {
             Some(toml::Value::Table(table)) => table.clone(),
             Some(_) => bail!("config {source} [task]: must be a table"),
         };
-        let physics: WorldConfig = match doc.get("physics") {
+        let physics = match doc.get("physics") {
             None => WorldConfig::default(),
-            Some(toml::Value::Table(table)) => overlay(&WorldConfig::default(), Some(table))
+            Some(toml::Value::Table(table)) => resolve_physics(&WorldConfig::default(), table)
                 .map_err(|e| anyhow!("config {source} [physics]: {e}"))?,
             Some(_) => bail!("config {source} [physics]: must be a table"),
         };
-        physics
-            .validate()
-            .map_err(|e| anyhow!("config {source} [physics]: {e}"))?;
         let curriculum = curriculum_from_doc(&doc, &task_table, &physics, source, registry)?;
         let terrain = match (doc.get("terrain"), curriculum.first()) {
             (None, Some(first)) => first.terrain.clone(),
@@ -906,6 +903,23 @@ mod tests {
         }
     }
 
+    /// A two-stage curriculum on rigid ground whose second stage has
+    /// `stage_keys` is refused with an error naming `c.toml` and saying
+    /// `expected`.
+    fn assert_stage_2_refused(stage_keys: &str, expected: &str) {
+        let text = format!(
+            "[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n{stage_keys}"
+        );
+        let err = format!(
+            "{:#}",
+            Experiment::from_toml_builtin(&text, "c.toml").unwrap_err()
+        );
+        assert!(
+            err.contains(expected) && err.contains("c.toml"),
+            "{stage_keys:?} gave {err:?}"
+        );
+    }
+
     #[test]
     fn a_stage_sets_task_keys_over_the_task_section() {
         let text = "[task]\nmax_phases = 12\ntermination_reward = -10.0\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 2\n\n[curriculum.task]\ntermination_reward = -30.0\nmax_paid_progress_m = 0.04\n";
@@ -965,17 +979,7 @@ mod tests {
                 "max_paid_progress_m caps distance_reward = \"new_ground\" only, but distance_reward = \"tracking\"",
             ),
         ] {
-            let text = format!(
-                "[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n{stage_keys}"
-            );
-            let err = format!(
-                "{:#}",
-                Experiment::from_toml_builtin(&text, "c.toml").unwrap_err()
-            );
-            assert!(
-                err.contains(expected) && err.contains("c.toml"),
-                "{stage_keys:?} gave {err:?}"
-            );
+            assert_stage_2_refused(stage_keys, expected);
         }
     }
 
@@ -1113,17 +1117,7 @@ mod tests {
                 "[residual] in [[curriculum]] stage 2's physics: control_steps = 12 must divide the phase's 90 physics steps",
             ),
         ] {
-            let text = format!(
-                "[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 2\n\n{stage_keys}"
-            );
-            let err = format!(
-                "{:#}",
-                Experiment::from_toml_builtin(&text, "c.toml").unwrap_err()
-            );
-            assert!(
-                err.contains(expected) && err.contains("c.toml"),
-                "{stage_keys:?} gave {err:?}"
-            );
+            assert_stage_2_refused(stage_keys, expected);
         }
     }
 

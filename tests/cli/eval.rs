@@ -157,6 +157,145 @@ fn eval_episodes_are_the_rollouts_of_their_seeds_and_its_files_are_written() {
 }
 
 #[test]
+fn seed_sets_run_as_one_evaluation_with_each_sets_success() {
+    let out = scratch_dir("eval-sets");
+    let args = [
+        "--policy",
+        "scripted",
+        "--terrain",
+        "rigid",
+        "--episodes",
+        "2",
+        "--phases",
+        "4",
+        "--seed",
+        "40",
+        "--seed",
+        "100",
+        "--threads",
+        "2",
+    ];
+    let e = eval_json(&args, &out);
+    let episodes = e["episodes"].as_array().unwrap();
+    let seeds: Vec<u64> = episodes
+        .iter()
+        .map(|e| e["seed"].as_u64().unwrap())
+        .collect();
+    assert_eq!(
+        seeds,
+        [40, 41, 100, 101],
+        "set after set, each in seed order"
+    );
+    assert_episodes_are_rollouts(&e, "scripted", &["--terrain", "rigid"], "4");
+    // each set's share adds up to the pooled summary
+    let sets = e["seed_sets"].as_array().unwrap();
+    assert_eq!(sets.len(), 2);
+    for (set, own) in sets.iter().zip(episodes.chunks(2)) {
+        assert_eq!(set["first_seed"], own[0]["seed"]);
+        assert_eq!(set["episodes"], 2);
+        let successes = own.iter().filter(|e| e["fall"].is_null()).count();
+        assert_eq!(set["successes"].as_u64().unwrap(), successes as u64);
+        let mean = own
+            .iter()
+            .map(|e| e["distance_m"].as_f64().unwrap())
+            .sum::<f64>()
+            / 2.0;
+        assert!((set["mean_distance_m"].as_f64().unwrap() - mean).abs() < 1e-12);
+    }
+    let pooled: u64 = sets.iter().map(|s| s["successes"].as_u64().unwrap()).sum();
+    assert_eq!(e["summary"]["successes"].as_u64().unwrap(), pooled);
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).unwrap()).unwrap();
+    assert_eq!(report["seed_sets"], e["seed_sets"]);
+    let table = std::fs::read_to_string(out.join("table1.md")).unwrap();
+    assert!(
+        table.contains("(4 episodes, seed sets 40.., 100..)"),
+        "{table}"
+    );
+
+    // the text names the sets and prints a line for each
+    let run = super::quadwalk(&[
+        "eval",
+        "--policy",
+        "scripted",
+        "--terrain",
+        "rigid",
+        "--episodes",
+        "2",
+        "--phases",
+        "4",
+        "--seed",
+        "40",
+        "--seed",
+        "100",
+        "--out",
+        s(&scratch_dir("eval-sets-text")),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        text.contains("4 episodes x 4 phases, seed sets 40..41, 100..101"),
+        "{text}"
+    );
+    for set in ["40..41", "100..101"] {
+        assert!(text.contains(&format!("  seed set      {set}: ")), "{text}");
+    }
+
+    // one set writes no breakdown, as before
+    let one = eval_json(
+        &[
+            "--policy",
+            "scripted",
+            "--terrain",
+            "rigid",
+            "--episodes",
+            "2",
+            "--phases",
+            "4",
+            "--seed",
+            "40",
+        ],
+        &scratch_dir("eval-sets-one"),
+    );
+    assert!(one.get("seed_sets").is_none(), "{one}");
+    assert_eq!(
+        one["episodes"].as_array().unwrap()[..],
+        e["episodes"].as_array().unwrap()[..2]
+    );
+
+    // sets that would run a seed twice are refused before anything runs
+    let dir = scratch_dir("eval-sets-overlap");
+    let err = failure(
+        &[
+            "eval",
+            "--policy",
+            "scripted",
+            "--terrain",
+            "rigid",
+            "--episodes",
+            "10",
+            "--seed",
+            "40",
+            "--seed",
+            "45",
+            "--out",
+            s(&dir),
+        ],
+        1,
+    );
+    assert!(
+        err.contains("--seed 40 and --seed 45 would both run seed 45")
+            && err.contains("10 consecutive seeds"),
+        "{err}"
+    );
+    assert!(!dir.join("eval.json").exists());
+}
+
+#[test]
 fn a_fall_is_counted_by_cause_like_the_rollout_ends() {
     // a minimum base height above the squat's: every episode falls at once
     let config = scratch_file(

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args;
 use experiment::Policy;
+use experiment::eval::seed_sets::SeedSets;
 pub use experiment::eval::{
     DEFAULT_FIRST_SEED, EvalReport, EvalRequest, EvalScene, REPORT_FILE, evaluate, record, slug,
     summary, table_columns, table1,
@@ -35,16 +36,19 @@ pub struct EvalArgs {
     scene: SceneArgs,
     #[command(flatten)]
     task: crate::commands::TaskOverrideArgs,
-    /// Episodes to run, on consecutive seeds from --seed
+    /// Episodes to run, on consecutive seeds from --seed (per seed set,
+    /// when --seed is given more than once)
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     episodes: u32,
     /// Phases per episode (0.75 s each; 400 = 5 minutes), unless it falls first
     #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     phases: u32,
     /// The first episode's seed (start position, terrain draw); episode k
-    /// uses seed + k
-    #[arg(long, default_value_t = DEFAULT_FIRST_SEED)]
-    seed: u64,
+    /// uses seed + k. Repeat it for several seed sets of --episodes each,
+    /// run as one evaluation with each set's success printed and written
+    /// (e.g. --episodes 10 --seed 1000000 --seed 41000000)
+    #[arg(long, default_values_t = [DEFAULT_FIRST_SEED])]
+    seed: Vec<u64>,
     /// Sample a trained policy's actions (seeded by the episode's seed)
     /// instead of taking the mean
     #[arg(long)]
@@ -75,8 +79,14 @@ pub struct EvalArgs {
 }
 
 /// The default output directory: inside the policy's run directory, or
-/// under `runs/` for the scripted crawl.
-fn default_out_dir(policy: &str, spec: &str, seed: u64) -> PathBuf {
+/// under `runs/` for the scripted crawl; named by the terrain and the first
+/// seed, and the number of seed sets when there are several.
+fn default_out_dir(policy: &str, spec: &str, sets: &SeedSets) -> PathBuf {
+    let seed = sets.first_seeds()[0];
+    let seed = match sets.len() {
+        1 => format!("{seed}"),
+        n => format!("{seed}-{n}sets"),
+    };
     let name = format!("eval-{}-seed{seed}", slug(spec));
     if policy == "scripted" {
         return Path::new("runs").join(format!("eval-scripted-{}-seed{seed}", slug(spec)));
@@ -129,20 +139,22 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
         return compare::compare(&args.compare, args.out.as_deref(), args.json);
     }
     args.video.check()?;
+    let sets =
+        SeedSets::new(args.seed.clone(), args.episodes.into()).map_err(anyhow::Error::msg)?;
+    let first_seed = sets.first_seeds()[0];
     let mut experiment = args.scene.experiment(registry)?;
     args.task.apply(&mut experiment)?;
-    let out_dir = args.out.clone().unwrap_or_else(|| {
-        default_out_dir(&args.policy, &experiment.terrain.to_string(), args.seed)
-    });
+    let out_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out_dir(&args.policy, &experiment.terrain.to_string(), &sets));
     let request = EvalRequest {
         policy: args.policy.clone(),
         experiment,
         config_path: args.scene.config_path().map(Path::to_path_buf),
         task_overrides: args.task.overrides.clone(),
         robot: args.scene.robot()?,
-        seeds: (0..args.episodes as u64)
-            .map(|k| args.seed.wrapping_add(k))
-            .collect(),
+        seeds: sets.seeds(),
         phases: args.phases,
         stochastic: args.stochastic,
         threads: args.threads.map(|n| n as usize),
@@ -154,7 +166,7 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
     std::fs::create_dir_all(&out_dir)
         .with_context(|| format!("--out {}: cannot create the directory", out_dir.display()))?;
     let quiet = args.json;
-    let report = scene.run_all(&request, &|n, total, record| {
+    let mut report = scene.run_all(&request, &|n, total, record| {
         if !quiet {
             eprintln!(
                 "episode {n}/{total} (seed {}): {:.2} m in {} phases{}",
@@ -168,9 +180,12 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
             );
         }
     })?;
+    if sets.len() > 1 {
+        report.seed_sets = sets.summarize(&report.episodes);
+    }
     write_outputs(&report, &out_dir)?;
     log_to_rerun(&report, &args.rerun, &request.robot)?;
-    let video = record_episode(registry, &scene, &request, args.seed, &args.video)?;
+    let video = record_episode(registry, &scene, &request, first_seed, &args.video)?;
     if args.json {
         let mut value = serde_json::to_value(&report)?;
         if let Some(episodes) = value.get_mut("episodes").and_then(|e| e.as_array_mut()) {
@@ -186,7 +201,7 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
                 "path": v.path.display().to_string(),
                 "frames": v.frames,
                 "steps_per_frame": v.steps_per_frame,
-                "seed": args.seed,
+                "seed": first_seed,
             });
         }
         out!("{value}");
@@ -196,7 +211,7 @@ pub fn eval(registry: &Registry, args: &EvalArgs) -> Result<()> {
             out!(
                 "video           {} (the episode of seed {}: {} frames, one every {} physics steps)",
                 v.path.display(),
-                args.seed,
+                first_seed,
                 v.frames,
                 v.steps_per_frame
             );
@@ -280,14 +295,23 @@ fn log_to_rerun(report: &EvalReport, rerun: &RerunArgs, model: &RobotModel) -> R
 
 fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
     let s = &report.summary;
+    let range = |first: u64, n: usize| format!("{first}..{}", first.wrapping_add(n as u64 - 1));
+    let seeds = match report.seed_sets.as_slice() {
+        [] => format!("seeds {}", range(report.first_seed, s.episodes)),
+        sets => format!(
+            "seed sets {}",
+            sets.iter()
+                .map(|set| range(set.first_seed, set.episodes))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
     out!(
-        "eval            {} on {}: {} episodes x {} phases, seeds {}..{}",
+        "eval            {} on {}: {} episodes x {} phases, {seeds}",
         report.policy,
         report.terrain,
         s.episodes,
         report.max_phases,
-        report.first_seed,
-        report.first_seed + s.episodes as u64 - 1
     );
     if !robot::world_config::is_paper_step_rate(&report.step_rate_hz) {
         out!(
@@ -302,6 +326,15 @@ fn print_report(report: &EvalReport, out_dir: &Path) -> Result<()> {
         s.episodes,
         100.0 * s.success_rate
     );
+    for set in &report.seed_sets {
+        out!(
+            "  seed set      {}: {}/{} ran every phase, {:.2} m mean",
+            range(set.first_seed, set.episodes),
+            set.successes,
+            set.episodes,
+            set.mean_distance_m
+        );
+    }
     let d = &s.distance_m;
     out!(
         "distance        mean {:.2} m, median {:.2}, p10 {:.2}, p90 {:.2} (min {:.2}, max {:.2})",
@@ -407,18 +440,27 @@ mod tests {
 
     #[test]
     fn output_directories_default_to_the_run_or_runs() {
+        let one = |seed| SeedSets::new(vec![seed], 10).unwrap();
         assert_eq!(
-            default_out_dir("scripted", "varying:2m:2,5cm", 7),
+            default_out_dir("scripted", "varying:2m:2,5cm", &one(7)),
             Path::new("runs/eval-scripted-varying_2m_2_5cm-seed7")
+        );
+        assert_eq!(
+            default_out_dir(
+                "scripted",
+                "rigid",
+                &SeedSets::new(vec![7, 41], 10).unwrap()
+            ),
+            Path::new("runs/eval-scripted-rigid-seed7-2sets")
         );
         let run = std::env::temp_dir().join(format!("qw-eval-run-{}", std::process::id()));
         std::fs::create_dir_all(run.join(learn::checkpoint::LATEST_LINK)).unwrap();
         assert_eq!(
-            default_out_dir(run.to_str().unwrap(), "elastic:5cm", 1),
+            default_out_dir(run.to_str().unwrap(), "elastic:5cm", &one(1)),
             run.join("eval-elastic_5cm-seed1")
         );
         assert_eq!(
-            default_out_dir(run.join("checkpoint-3").to_str().unwrap(), "rigid", 1),
+            default_out_dir(run.join("checkpoint-3").to_str().unwrap(), "rigid", &one(1)),
             run.join("eval-rigid-seed1")
         );
         std::fs::remove_dir_all(&run).unwrap();

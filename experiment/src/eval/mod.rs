@@ -10,6 +10,7 @@
 
 pub mod record;
 pub mod response;
+pub mod seed_sets;
 pub mod summary;
 pub mod table1;
 
@@ -28,6 +29,7 @@ use crate::config::Experiment;
 use crate::policy::Policy;
 use crate::scene::make_world;
 use record::{EpisodeRecord, EpisodeRecorder};
+use seed_sets::SeedSetSummary;
 use summary::Summary;
 
 /// The first episode seed unless told: far from the seeds training draws
@@ -67,6 +69,10 @@ pub struct EvalReport {
     pub step_rate_hz: u32,
     /// the aggregates
     pub summary: Summary,
+    /// each seed set's success, when the episodes were more than one set
+    /// of consecutive seeds ([`seed_sets::SeedSets`])
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub seed_sets: Vec<SeedSetSummary>,
     /// every episode, in seed order
     pub episodes: Vec<EpisodeRecord>,
 }
@@ -281,6 +287,7 @@ impl<'a> EvalScene<'a> {
             task_overrides: request.task_overrides.clone(),
             step_rate_hz: self.physics.step_rate_hz,
             summary,
+            seed_sets: Vec::new(),
             episodes,
         })
     }
@@ -321,12 +328,21 @@ impl EvalReport {
             .into_iter()
             .map(|t| (t.terrain.clone(), t))
             .collect();
+        let seeds = match self.seed_sets.as_slice() {
+            [] => format!("seeds {}..", self.first_seed),
+            sets => format!(
+                "seed sets {}",
+                sets.iter()
+                    .map(|set| format!("{}..", set.first_seed))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
         let table = format!(
-            "# Table I: {} on {} ({} episodes, seeds {}..)\n\nMean and standard deviation of the base height h_b and the mean (and standard deviation) of each foot's target landing height relative to its squat height, cm, per terrain type under the robot (`all`: every phase pooled).\n\n{}",
+            "# Table I: {} on {} ({} episodes, {seeds})\n\nMean and standard deviation of the base height h_b and the mean (and standard deviation) of each foot's target landing height relative to its squat height, cm, per terrain type under the robot (`all`: every phase pooled).\n\n{}",
             self.policy,
             self.terrain,
             self.summary.episodes,
-            self.first_seed,
             table1::markdown(&columns)
         );
         let path = dir.join("table1.md");

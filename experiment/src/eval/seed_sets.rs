@@ -91,10 +91,10 @@ impl SeedSets {
         self.first_seeds
             .iter()
             .map(|&first| {
-                let seeds: Vec<u64> = self.seeds_of(first).collect();
+                // seed + k for k < episodes_per_set, wrapping as `seeds_of`
                 let own: Vec<&EpisodeRecord> = episodes
                     .iter()
-                    .filter(|e| seeds.contains(&e.seed))
+                    .filter(|e| e.seed.wrapping_sub(first) < self.episodes_per_set)
                     .collect();
                 let n = own.len();
                 SeedSetSummary {
@@ -142,5 +142,38 @@ mod tests {
         assert!(err.contains("--seed 7 and --seed 7"), "{err}");
         assert!(SeedSets::new(vec![], 3).is_err());
         assert!(SeedSets::new(vec![1], 0).is_err());
+    }
+
+    #[test]
+    fn each_set_counts_its_own_episodes_wrapping_included() {
+        use crate::eval::summary::tests::crafted;
+        let sets = SeedSets::new(vec![u64::MAX, 40], 2).unwrap();
+        // distances are one metre per phase: 2, 1, 3 and 4 m
+        let episodes = [
+            crafted(40, &["rigid", "rigid"], None),
+            crafted(u64::MAX, &["rigid"], Some(("base_too_low", &[]))),
+            crafted(0, &["rigid", "rigid", "rigid"], None),
+            crafted(41, &["rigid"; 4], Some(("pitch_too_large", &[]))),
+            crafted(7, &["rigid"], None),
+        ];
+        let summaries = sets.summarize(&episodes);
+        assert_eq!(
+            summaries,
+            [
+                SeedSetSummary {
+                    first_seed: u64::MAX,
+                    episodes: 2,
+                    successes: 1,
+                    mean_distance_m: 2.0,
+                },
+                SeedSetSummary {
+                    first_seed: 40,
+                    episodes: 2,
+                    successes: 1,
+                    mean_distance_m: 3.0,
+                },
+            ],
+            "seed 7 is in no set"
+        );
     }
 }

@@ -317,7 +317,7 @@ pub fn angle_bin_centre_deg(bin: usize) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::super::record::{Fall, PhaseRecord};
     use super::*;
 
@@ -337,7 +337,13 @@ mod tests {
 
     /// An episode on `terrains` (one phase each, 1 m per phase) that falls
     /// with `fall` in its last phase, if given.
-    fn crafted(seed: u64, terrains: &[&str], fall: Option<(&str, &[&str])>) -> EpisodeRecord {
+    /// An episode of `seed` with one phase (1 m) per terrain named, and the
+    /// fall given (its cause and links).
+    pub(crate) fn crafted(
+        seed: u64,
+        terrains: &[&str],
+        fall: Option<(&str, &[&str])>,
+    ) -> EpisodeRecord {
         let mut by_terrain: BTreeMap<String, TerrainSamples> = BTreeMap::new();
         for t in terrains {
             let s = by_terrain.entry(t.to_string()).or_default();

@@ -159,7 +159,8 @@ fn eval_episodes_are_the_rollouts_of_their_seeds_and_its_files_are_written() {
 #[test]
 fn seed_sets_run_as_one_evaluation_with_each_sets_success() {
     let out = scratch_dir("eval-sets");
-    let args = [
+    // the crawl on rigid ground, two episodes of 4 phases per set
+    let scene = [
         "--policy",
         "scripted",
         "--terrain",
@@ -168,13 +169,9 @@ fn seed_sets_run_as_one_evaluation_with_each_sets_success() {
         "2",
         "--phases",
         "4",
-        "--seed",
-        "40",
-        "--seed",
-        "100",
-        "--threads",
-        "2",
     ];
+    let two_sets = ["--seed", "40", "--seed", "100"];
+    let args = [&scene[..], &two_sets, &["--threads", "2"]].concat();
     let e = eval_json(&args, &out);
     let episodes = e["episodes"].as_array().unwrap();
     let seeds: Vec<u64> = episodes
@@ -214,23 +211,9 @@ fn seed_sets_run_as_one_evaluation_with_each_sets_success() {
     );
 
     // the text names the sets and prints a line for each
-    let run = super::quadwalk(&[
-        "eval",
-        "--policy",
-        "scripted",
-        "--terrain",
-        "rigid",
-        "--episodes",
-        "2",
-        "--phases",
-        "4",
-        "--seed",
-        "40",
-        "--seed",
-        "100",
-        "--out",
-        s(&scratch_dir("eval-sets-text")),
-    ]);
+    let text_out = scratch_dir("eval-sets-text");
+    let run =
+        super::quadwalk(&[&["eval"][..], &scene, &two_sets, &["--out", s(&text_out)]].concat());
     assert!(
         run.status.success(),
         "{}",
@@ -247,18 +230,7 @@ fn seed_sets_run_as_one_evaluation_with_each_sets_success() {
 
     // one set writes no breakdown, as before
     let one = eval_json(
-        &[
-            "--policy",
-            "scripted",
-            "--terrain",
-            "rigid",
-            "--episodes",
-            "2",
-            "--phases",
-            "4",
-            "--seed",
-            "40",
-        ],
+        &[&scene[..], &["--seed", "40"]].concat(),
         &scratch_dir("eval-sets-one"),
     );
     assert!(one.get("seed_sets").is_none(), "{one}");

@@ -54,6 +54,23 @@ pub trait Algorithm: Send {
         }
     }
 
+    /// Gives the networks an observation of `obs_size` values, the present
+    /// ones followed by new ones, from the next iteration on (a curriculum
+    /// stage that turns on an observation block), every action and value
+    /// unchanged until training moves them; nothing changes at the present
+    /// size. A learner that cannot grow its input refuses.
+    fn widen_observation(&mut self, obs_size: usize) -> Result<(), LearnError> {
+        if obs_size == self.obs_size() {
+            Ok(())
+        } else {
+            Err(LearnError::Config(format!(
+                "{} cannot grow its observation from {} to {obs_size} values mid-run; only PPO can",
+                self.name(),
+                self.obs_size()
+            )))
+        }
+    }
+
     /// The deterministic actions for raw observations `k x O`, in [-1, 1].
     fn act_deterministic(&self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError>;
 

@@ -8,7 +8,8 @@
 //! after the move. Start and target are uniform in [-1, 1]^2; an episode is
 //! truncated after `episode_steps` steps. Episode metric: the final distance.
 //! [`PointMass::with_time_for_critic`] appends one privileged value, the
-//! share of the episode gone, that only an asymmetric critic sees.
+//! share of the episode gone, that only an asymmetric critic sees;
+//! [`PointMass::with_time_observed`] the same value for both networks.
 //! The task is symmetric about the x axis: [`PointMassMirror`] negates
 //! every y.
 
@@ -27,7 +28,15 @@ pub struct PointMass {
     steps: Vec<usize>,
     rngs: Vec<ChaCha8Rng>,
     episode_steps: usize,
-    time_for_critic: bool,
+    time: TimeShown,
+}
+
+/// Who sees the share of the episode gone, a fifth observation value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum TimeShown {
+    Nobody,
+    CriticOnly,
+    Both,
 }
 
 impl PointMass {
@@ -41,7 +50,7 @@ impl PointMass {
                 .map(|i| ChaCha8Rng::seed_from_u64(i as u64))
                 .collect(),
             episode_steps,
-            time_for_critic: false,
+            time: TimeShown::Nobody,
         }
     }
 
@@ -50,7 +59,16 @@ impl PointMass {
     /// ([`VecEnv::policy_observation_size`] is 4).
     pub fn with_time_for_critic(num_envs: usize, episode_steps: usize) -> Self {
         Self {
-            time_for_critic: true,
+            time: TimeShown::CriticOnly,
+            ..Self::new(num_envs, episode_steps)
+        }
+    }
+
+    /// As [`PointMass::new`], each observation row followed by the share of
+    /// the episode gone, for the policy and the critic.
+    pub fn with_time_observed(num_envs: usize, episode_steps: usize) -> Self {
+        Self {
+            time: TimeShown::Both,
             ..Self::new(num_envs, episode_steps)
         }
     }
@@ -66,7 +84,7 @@ impl PointMass {
         let [x, y] = self.position[i];
         let [tx, ty] = self.target[i];
         obs[..4].copy_from_slice(&[x, y, tx - x, ty - y]);
-        if self.time_for_critic {
+        if self.time != TimeShown::Nobody {
             obs[4] = self.steps[i] as f32 / self.episode_steps as f32;
         }
     }
@@ -104,11 +122,11 @@ impl VecEnv for PointMass {
     }
 
     fn observation_size(&self) -> usize {
-        4 + usize::from(self.time_for_critic)
+        4 + usize::from(self.time != TimeShown::Nobody)
     }
 
     fn policy_observation_size(&self) -> usize {
-        4
+        4 + usize::from(self.time == TimeShown::Both)
     }
 
     fn action_size(&self) -> usize {
@@ -540,6 +558,57 @@ mod tests {
             resumed.checkpoint_files().unwrap(),
             straight.checkpoint_files().unwrap()
         );
+    }
+
+    /// An observation grown mid-run (a curriculum stage that turns the
+    /// height scan on): both networks act and value as before, the actor
+    /// learns weights for the new input, and it cannot grow again, shrink,
+    /// or grow in front of a critic's privileged values.
+    #[test]
+    fn an_observation_grown_mid_run_keeps_the_policy_and_learns_the_new_value() {
+        let mut t = Trainer::new(toy_config(), 4, 2, 5).unwrap();
+        let mut env = PointMass::new(16, 25);
+        for _ in 0..5 {
+            t.iterate(&mut env).unwrap();
+        }
+        let obs = [0.1f32, -0.2, 0.5, -0.5];
+        let before = t.act_deterministic(&obs).unwrap();
+        let normalized = |n: &crate::normalizer::ObsNormalizer, row: &[f32]| {
+            let mut row = row.to_vec();
+            n.normalize(&mut row);
+            row
+        };
+        let value_before = t.policy.values(&normalized(&t.normalizer, &obs)).unwrap();
+        t.widen_observation(5).unwrap();
+        assert_eq!(t.policy.obs_size(), 5);
+        for time in [0.0f32, 0.5, 1.0] {
+            let grown = [obs[0], obs[1], obs[2], obs[3], time];
+            assert_eq!(t.act_deterministic(&grown).unwrap(), before);
+            let value = t.policy.values(&normalized(&t.normalizer, &grown)).unwrap();
+            assert_eq!(value, value_before);
+        }
+        let mut env = PointMass::with_time_observed(16, 25);
+        for _ in 0..6 {
+            t.iterate(&mut env).unwrap();
+        }
+        assert_eq!(t.normalizer.appended.unwrap().from, 4);
+        let new_row: Vec<f32> = t.policy.actor.layers[0]
+            .weight
+            .as_tensor()
+            .get(4)
+            .unwrap()
+            .to_vec1()
+            .unwrap();
+        assert!(new_row.iter().any(|w| w.abs() > 1e-4), "{new_row:?}");
+        t.widen_observation(5).unwrap();
+        let err = t.widen_observation(4).unwrap_err().to_string();
+        assert!(err.contains("cannot be cut"), "{err}");
+        let err = t.widen_observation(6).unwrap_err().to_string();
+        assert!(err.contains("grow only once"), "{err}");
+        let mut asymmetric = Trainer::new(toy_config(), 4, 2, 5).unwrap();
+        asymmetric.widen_critic(1).unwrap();
+        let err = asymmetric.widen_observation(5).unwrap_err().to_string();
+        assert!(err.contains("privileged values"), "{err}");
     }
 
     #[test]

@@ -14,6 +14,7 @@
 //! | `hip_heights_m` | 4 | each hip above the ground below it, FR FL RR RL |
 //! | `feet_in_world_m` | 4 x 3 | or, instead, `joint_angles_rad` (12): the feet by forward kinematics |
 //! | `centre_of_mass_m` | 3 | needed only with the scripted-crawl action prior |
+//! | `height_scan_m` | 18 | needed only with `height_scan` on: the base's height above the ground at the points ahead of it (`robot::height_scan`) |
 //!
 //! `Sim.state()` gives every key (and `joint_angles_rad`,
 //! `joint_velocities_rad_per_s`).
@@ -29,6 +30,7 @@ use robot::RobotModel;
 use robot::WorldConfig;
 use robot::action::ACTION_SIZE;
 use robot::controller::{PhaseController, PhasePlan, RobotState};
+use robot::height_scan::HEIGHT_SCAN_POINTS;
 use robot::task::{Task, TaskConfig};
 use robot::world::World;
 
@@ -66,6 +68,7 @@ fn robot_state(
     controller: &PhaseController,
     state: &Bound<'_, PyDict>,
     needs_com: bool,
+    needs_scan: bool,
 ) -> PyResult<RobotState> {
     let q = values(state, "base_orientation_xyzw", 4)?;
     let quaternion = Quaternion::new(q[3], q[0], q[1], q[2]);
@@ -103,6 +106,18 @@ fn robot_state(
     } else {
         Vector3::zeros()
     };
+    let height_scan_m = if needs_scan || state.contains("height_scan_m")? {
+        let scan = values(state, "height_scan_m", HEIGHT_SCAN_POINTS).map_err(|e| {
+            if needs_scan {
+                PyValueError::new_err(format!("{e} (the observation's height scan reads it)"))
+            } else {
+                e
+            }
+        })?;
+        Some(std::array::from_fn(|k| scan[k]))
+    } else {
+        None
+    };
     Ok(RobotState {
         base_pose,
         base_linear_velocity_m_per_s: vector(state, "base_linear_velocity_m_per_s")?,
@@ -110,6 +125,7 @@ fn robot_state(
         feet_in_world_m,
         hip_heights_m: [hips[0], hips[1], hips[2], hips[3]],
         centre_of_mass_m,
+        height_scan_m,
     })
 }
 
@@ -119,6 +135,7 @@ fn robot_state(
 pub struct Controller {
     inner: PhaseController,
     needs_com: bool,
+    needs_scan: bool,
     plan: Option<PhasePlan>,
 }
 
@@ -141,12 +158,13 @@ impl Controller {
         Ok(Self {
             inner,
             needs_com: task.action_prior != robot::task::ActionPrior::None,
+            needs_scan: task.observation.height_scan,
             plan: None,
         })
     }
 
     fn state(&self, state: &Bound<'_, PyDict>) -> PyResult<RobotState> {
-        robot_state(&self.inner, state, self.needs_com)
+        robot_state(&self.inner, state, self.needs_com, self.needs_scan)
     }
 
     fn plan(&self) -> PyResult<&PhasePlan> {
@@ -386,7 +404,7 @@ impl Sim {
     /// angles and velocities).
     fn state<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let world = self.world();
-        let s = RobotState::of_world(world);
+        let s = RobotState::of_world_scanned(world);
         let d = PyDict::new(py);
         let v = |v: Vector3<f64>| [v.x, v.y, v.z];
         d.set_item("base_position_m", v(s.base_pose.translation.vector))?;
@@ -403,6 +421,7 @@ impl Sim {
         d.set_item("hip_heights_m", s.hip_heights_m)?;
         d.set_item("feet_in_world_m", s.feet_in_world_m.map(v))?;
         d.set_item("centre_of_mass_m", v(s.centre_of_mass_m))?;
+        d.set_item("height_scan_m", s.height_scan_m)?;
         d.set_item("joint_angles_rad", world.joint_positions_rad())?;
         d.set_item(
             "joint_velocities_rad_per_s",

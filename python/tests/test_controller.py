@@ -101,3 +101,29 @@ def test_the_controller_steps_at_its_configs_rate_and_run_phase_refuses_another(
     paper.begin_episode(robot.state())
     with pytest.raises(ValueError, match="the robot steps .* the controller plans steps"):
         quadwalk.run_phase(paper, robot, np.zeros(27, np.float32), robot.state())
+
+
+def test_a_height_scan_controller_observes_the_states_scan_and_names_it_missing(tmp_path):
+    """With `height_scan` on, the observation ends with the state's 18
+    scanned heights, as the environment's does; a state without them is
+    refused by name."""
+    config = tmp_path / "scan.toml"
+    config.write_text('[terrain]\nspec = "slope:10"\n\n[task.observation]\nheight_scan = true\n')
+    env = quadwalk.make_env(config=str(config), seed=5)
+    env_obs, _ = env.reset(seed=5)
+    robot = quadwalk.Sim(config=str(config), seed=5)
+    robot.reset()
+    controller = quadwalk.Controller(config=str(config))
+    assert controller.observation_size == 102 + 18
+    state = robot.state()
+    controller.begin_episode(state)
+    obs = controller.observe(state, list(env.goal_xy_m))
+    np.testing.assert_array_equal(obs, env_obs)
+    scan = np.asarray(state["height_scan_m"])
+    np.testing.assert_array_equal(obs[-18:], scan.astype(np.float32))
+    # the ground rises ahead: each row 0.2 m further is ~3.5 cm nearer the base
+    rows = scan.reshape(6, 3)
+    assert np.all(np.abs(rows[:-1] - rows[1:] - np.tan(np.radians(10)) * 0.2) < 2e-3)
+    without = {k: v for k, v in state.items() if k != "height_scan_m"}
+    with pytest.raises(ValueError, match="height_scan_m.*height scan"):
+        controller.observe(without, [2.0, 0.0])

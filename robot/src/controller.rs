@@ -35,6 +35,7 @@
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 use crate::action::{ACTION_SIZE, CubicBezier, PhaseCurves, curves_from_action};
+use crate::height_scan::{HeightScan, height_scan_m};
 use crate::kinematics::LegKinematics;
 use crate::model::{LegName, RobotModel};
 use crate::scripted::ScriptedCrawl;
@@ -63,6 +64,10 @@ pub struct RobotState {
     /// the whole robot's centre of mass, m (read by the scripted-crawl
     /// action prior only)
     pub centre_of_mass_m: Vector3<f64>,
+    /// the base's height above the ground at the points ahead of it
+    /// ([`crate::height_scan`]), m; read only by an observation with
+    /// `height_scan` on, `None` where it was not measured
+    pub height_scan_m: Option<HeightScan>,
 }
 
 impl RobotState {
@@ -76,6 +81,16 @@ impl RobotState {
             feet_in_world_m: world.feet_in_world_m(),
             hip_heights_m: world.hip_heights_m(),
             centre_of_mass_m: world.centre_of_mass_m(),
+            height_scan_m: None,
+        }
+    }
+
+    /// [`Self::of_world`] with the height scan of the ground ahead
+    /// ([`crate::height_scan::height_scan_m`]).
+    pub fn of_world_scanned(world: &World) -> Self {
+        Self {
+            height_scan_m: Some(height_scan_m(world)),
+            ..Self::of_world(world)
         }
     }
 
@@ -427,6 +442,12 @@ impl PhaseController {
         out.push(goal.x);
         out.push(goal.y);
         out.push((memory.phase % 4) as f64 / 4.0);
+        if c.height_scan {
+            let scan = state.height_scan_m.expect(
+                "the observation's height scan needs a state with it (RobotState::of_world_scanned)",
+            );
+            out.extend(scan);
+        }
         if self.action_prior != ActionPrior::None {
             out.extend(self.prior_action(state).iter().map(|&a| f64::from(a)));
         }

@@ -3,6 +3,7 @@
 
 pub mod action;
 pub mod controller;
+pub mod height_scan;
 pub mod kinematics;
 pub mod mesh;
 pub mod model;

@@ -42,6 +42,10 @@ pub struct StepSnapshot {
     /// the point the observation's goal blocks show when it is not the
     /// current goal (`[task.observation] goal_line_ahead_m`), x and y, m
     pub observed_goal_xy_m: Option<[f64; 2]>,
+    /// the points of the observation's height scan on the ground (x, y and
+    /// the surface's height there), m; empty where the task does not
+    /// observe one (`[task.observation] height_scan`)
+    pub height_scan_points_m: Vec<[f64; 3]>,
 }
 
 /// What a phase is about to do: its three curves and where they are.

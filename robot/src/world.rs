@@ -571,6 +571,7 @@ impl World {
             tiles,
             goal_xy_m,
             observed_goal_xy_m: None,
+            height_scan_points_m: Vec::new(),
         }
     }
 

@@ -447,6 +447,48 @@ fn a_stage_gives_the_critic_privileged_values_and_resumes_and_forks_exactly() {
     rolls_out_two_phases_on_rigid_ground(&runs.a);
 }
 
+/// A stage that turns the height scan on: both networks take its 18
+/// values from the stage on (the checkpoint says so), a resume at the
+/// boundary and a fork from a run without it end as the uninterrupted run,
+/// and the policy acts on the scanned observation.
+#[test]
+fn a_stage_appends_the_height_scan_and_resumes_and_forks_exactly() {
+    let runs = TwoStages::new(
+        "stage-height-scan",
+        "\n[curriculum.task.observation]\nheight_scan = true\n",
+    );
+    let log = runs.train(&runs.a);
+    assert!(
+        log.contains("curriculum stage 2: rigid, task: observation = { height_scan = true }"),
+        "{log}"
+    );
+    let state = |iteration: &str| {
+        std::fs::read_to_string(
+            runs.a
+                .join("checkpoints")
+                .join(iteration)
+                .join("state.toml"),
+        )
+        .unwrap()
+    };
+    assert!(state("iter-000002").contains("obs_size = 102"));
+    let widened = state("iter-000004");
+    assert!(
+        widened.contains("obs_size = 120") && widened.contains("normalizer_appended_from = 102"),
+        "{widened}"
+    );
+    runs.resume_after_stage_1(|_| {});
+    let plain = TwoStages::new("stage-height-scan-source", "");
+    plain.train(&plain.a);
+    let forked = runs.b.with_file_name("forked");
+    ok(&runs.args(
+        &forked,
+        &["--fork", s(&plain.a.join("checkpoints/iter-000002"))],
+    ));
+    assert_eq!(weights(&runs.a), weights(&forked), "the fork differs");
+    rolls_out_two_phases_on_rigid_ground(&runs.a);
+}
+
 /// `--fork`: a run that goes on from another run's checkpoint, under a
 /// config that trains the checkpoint's iterations as that run did, ends as
 /// the config's run from scratch does (weights and metrics), and can be

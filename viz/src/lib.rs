@@ -16,6 +16,7 @@
 //! | `world/base/trajectory` | `LineStrips3D`: the base path so far (a point per centimetre moved, then the current position) | every logged frame |
 //! | `world/goal` | `Points3D` | every logged frame of a task (`stand` has no goal) |
 //! | `world/observed_goal` | `Points3D`: the point on the goals' line the policy observes (`goal_line_ahead_m`) | every logged frame of a task that observes one |
+//! | `world/height_scan` | `Points3D`: the points on the ground whose height the policy observes (`height_scan`) | every logged frame of a task that observes them |
 //! | `world/targets/base` | `LineStrips3D`: the base position curve | every phase start |
 //! | `world/targets/orientation` | `Arrows3D`: the base up axis along the orientation curve | every phase start |
 //! | `world/targets/swing_foot` | `LineStrips3D`: the swing foot curve | every phase start |

@@ -432,6 +432,21 @@ impl RolloutLogger {
                 );
             }
         }
+        // The height scan's points on the ground, where the policy sees it.
+        if !snap.height_scan_points_m.is_empty() {
+            let points = snap
+                .height_scan_points_m
+                .iter()
+                .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]);
+            results.push(
+                rec.log(
+                    "world/height_scan",
+                    &rerun::Points3D::new(points)
+                        .with_radii([0.012])
+                        .with_colors([[40, 190, 120]]),
+                ),
+            );
+        }
         // Tiles: the top face at its rest height less the sink, 2 cm thick;
         // tiles on a hill turned about y by their top's inclination.
         let thickness = 0.02f32;

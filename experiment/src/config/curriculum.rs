@@ -235,10 +235,12 @@ impl Experiment {
     }
 }
 
-/// The one `[curriculum.task.observation]` key a stage may set: the
-/// critic's privileged values, which the learner adds to the critic's input
-/// when the stage starts (the policy's input stays the run's).
-const STAGE_OBSERVATION_KEY: &str = "privileged_critic";
+/// The `[curriculum.task.observation]` keys a stage may set: the critic's
+/// privileged values, which the learner adds to the critic's input when the
+/// stage starts (the policy's input stays the run's), and the height scan,
+/// which it appends to both networks' input (the new inputs' weights start
+/// at zero, so the policy acts as before until training moves them).
+const STAGE_OBSERVATION_KEYS: [&str; 2] = ["privileged_critic", "height_scan"];
 
 /// A stage's task: `[task]`'s keys with the stage's `[curriculum.task]`
 /// keys on top; keys that change the policy's input are refused.
@@ -263,9 +265,12 @@ fn stage_task(task_table: &toml::Table, overrides: &toml::Table) -> Result<TaskC
         let toml::Value::Table(observation) = value else {
             return Err("observation must be a table ([curriculum.task.observation])".into());
         };
-        if let Some(other) = observation.keys().find(|k| *k != STAGE_OBSERVATION_KEY) {
+        if let Some(other) = observation
+            .keys()
+            .find(|k| !STAGE_OBSERVATION_KEYS.contains(&k.as_str()))
+        {
             return Err(format!(
-                "{}; of [curriculum.task.observation] only {STAGE_OBSERVATION_KEY} (the critic's input) may be set",
+                "{}; of [curriculum.task.observation] only privileged_critic (the critic's input) and height_scan (appended to the networks' input) may be set",
                 fixed(&format!("observation.{other}"))
             ));
         }
@@ -280,11 +285,18 @@ fn stage_task(task_table: &toml::Table, overrides: &toml::Table) -> Result<TaskC
 }
 
 impl Experiment {
-    /// A critic cannot lose inputs: once a stage turns `privileged_critic`
-    /// on, every later stage keeps it on. A residual's critic sees the
-    /// residual's own observation, so `[residual]` refuses it.
+    /// A network cannot lose inputs: once a stage turns `privileged_critic`
+    /// or `height_scan` on, every later stage keeps it on. A residual's
+    /// critic sees the residual's own observation, so `[residual]` refuses
+    /// a privileged critic, and its networks the residual's observation, so
+    /// a stage turning the height scan on too. The networks' inputs grow at
+    /// most once in a run (the normaliser counts one appended block), and a
+    /// height scan turned on by a stage must be the observation's last
+    /// values, so neither after a privileged critic nor with an action
+    /// prior.
     pub(super) fn check_stage_critics(&self, source: &str) -> Result<()> {
         let privileged = |stage: &Stage| self.task_of(stage).observation.privileged_critic;
+        let scanned = |stage: &Stage| self.task_of(stage).observation.height_scan;
         if self.residual.is_some()
             && (self.task.observation.privileged_critic || self.curriculum.iter().any(privileged))
         {
@@ -292,16 +304,54 @@ impl Experiment {
                 "{source}: privileged_critic gives the phase-level policy's critic privileged values; a [residual] policy's critic sees the residual's own observation, so it cannot be set with [residual]"
             );
         }
-        let mut first_on = None;
-        for (k, stage) in self.curriculum.iter().enumerate() {
-            match (first_on, privileged(stage)) {
-                (None, true) => first_on = Some(k),
-                (Some(on), false) => bail!(
-                    "{source} [[curriculum]] stage {}: the critic sees its privileged values from stage {} on and cannot lose them; set [curriculum.task.observation] privileged_critic = true in this stage too",
-                    k + 1,
-                    on + 1
-                ),
-                _ => {}
+        let mut grown = Vec::new();
+        for (key, on) in [
+            ("privileged_critic", &privileged as &dyn Fn(&Stage) -> bool),
+            ("height_scan", &scanned),
+        ] {
+            let mut first_on = None;
+            for (k, stage) in self.curriculum.iter().enumerate() {
+                match (first_on, on(stage)) {
+                    (None, true) => first_on = Some(k),
+                    (Some(first), false) => bail!(
+                        "{source} [[curriculum]] stage {}: the networks see {key} from stage {} on and cannot lose it; set [curriculum.task.observation] {key} = true in this stage too",
+                        k + 1,
+                        first + 1
+                    ),
+                    _ => {}
+                }
+            }
+            // turned on by a stage after the first: the inputs grow there
+            if let Some(first) = first_on.filter(|&k| k > 0) {
+                grown.push((key, first));
+            }
+        }
+        if let [(a, at_a), (b, at_b)] = grown[..] {
+            bail!(
+                "{source}: stage {} turns {a} on and stage {} {b}: the networks' inputs can grow once in a run; turn one of them on in [task]",
+                at_a + 1,
+                at_b + 1
+            );
+        }
+        if let Some(&(_, at)) = grown.iter().find(|(key, _)| *key == "height_scan") {
+            let task = self.task_of(&self.curriculum[at]);
+            if self.residual.is_some() {
+                bail!(
+                    "{source} [[curriculum]] stage {}: height_scan is the phase-level policy's observation; a [residual] policy's networks see the residual's own",
+                    at + 1
+                );
+            }
+            if task.observation.privileged_critic {
+                bail!(
+                    "{source} [[curriculum]] stage {}: a stage can append the height scan to the networks' input only while the critic has no privileged values (they would fall between); turn height_scan on in [task]",
+                    at + 1
+                );
+            }
+            if task.action_prior != robot::task::ActionPrior::None {
+                bail!(
+                    "{source} [[curriculum]] stage {}: with an action prior the prior's values follow the height scan, so a stage cannot append it; turn height_scan on in [task]",
+                    at + 1
+                );
             }
         }
         Ok(())

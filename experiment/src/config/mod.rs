@@ -753,6 +753,70 @@ mod tests {
         );
     }
 
+    /// A stage may turn the height scan on: the networks' input grows by
+    /// its 18 values at the stage and keeps them; it grows once in a run,
+    /// and only at the observation's end (no privileged critic or action
+    /// prior before it, no residual).
+    #[test]
+    fn a_stage_appends_the_height_scan_for_good_once() {
+        let stages = |task: &str, second: &str, third: &str| {
+            format!(
+                "[task]\nmax_phases = 10\n{task}\n[[curriculum]]\nterrain = \"rigid\"\niterations = 3\n\n[[curriculum]]\nterrain = \"elastic:5cm:slope=10\"\niterations = 2\n{second}\n[[curriculum]]\nterrain = \"elastic:5cm:slope=10\"\niterations = 2\n{third}"
+            )
+        };
+        let scan = "\n[curriculum.task.observation]\nheight_scan = true\n";
+        let e = Experiment::from_toml_builtin(&stages("", scan, scan), "c.toml").unwrap();
+        assert!(!e.task_at(2).observation.height_scan);
+        assert_eq!(e.task_at(2).observation_size(), 102);
+        for late in [3, 6] {
+            assert_eq!(
+                e.task_at(late).observation_size(),
+                102 + 18,
+                "iteration {late}"
+            );
+        }
+        writes_and_reads_back(&e, "[curriculum.task.observation]\nheight_scan = true\n");
+        let refused = |task: &str, second: &str, third: &str, expected: &str| {
+            let err = Experiment::from_toml_builtin(&stages(task, second, third), "c.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(expected), "{err}");
+        };
+        refused(
+            "",
+            scan,
+            "",
+            "stage 3: the networks see height_scan from stage 2 on and cannot lose it",
+        );
+        refused(
+            "",
+            scan,
+            "\n[curriculum.task.observation]\nheight_scan = true\nprivileged_critic = true\n",
+            "stage 3 turns privileged_critic on and stage 2 height_scan: the networks' inputs can grow once in a run",
+        );
+        refused(
+            "\n[task.observation]\nprivileged_critic = true\n",
+            scan,
+            scan,
+            "stage 2: a stage can append the height scan to the networks' input only while the critic has no privileged values",
+        );
+        refused(
+            "action_prior = \"scripted_crawl\"\n",
+            scan,
+            scan,
+            "stage 2: with an action prior the prior's values follow the height scan",
+        );
+        // from the start, with a prior or a privileged critic, it is the
+        // run's observation
+        let from_start = stages(
+            "action_prior = \"scripted_crawl\"\n[task.observation]\nheight_scan = true\nprivileged_critic = true\n",
+            "",
+            "",
+        );
+        let e = Experiment::from_toml_builtin(&from_start, "c.toml").unwrap();
+        assert_eq!(e.task_at(0).observation_size(), 102 + 18 + 27);
+    }
+
     /// A stage may turn the critic's privileged values on (the policy's
     /// input stays the run's); later stages must keep them; the resolved
     /// file writes the stage's observation table where it belongs.
@@ -785,7 +849,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            err.contains("stage 3: the critic sees its privileged values from stage 2 on"),
+            err.contains("stage 3: the networks see privileged_critic from stage 2 on"),
             "{err}"
         );
         // a residual's critic sees the residual's observation
@@ -960,7 +1024,7 @@ mod tests {
         for (stage_keys, expected) in [
             (
                 "[curriculum.task.observation]\nfoot_history = false\n",
-                "stage 2 [curriculum.task]: observation.foot_history cannot change between stages (it sets the networks' input); set it in [task]; of [curriculum.task.observation] only privileged_critic (the critic's input) may be set",
+                "stage 2 [curriculum.task]: observation.foot_history cannot change between stages (it sets the networks' input); set it in [task]; of [curriculum.task.observation] only privileged_critic (the critic's input) and height_scan (appended to the networks' input) may be set",
             ),
             (
                 "[curriculum.task]\naction_prior = \"scripted_crawl\"\n",

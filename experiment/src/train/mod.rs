@@ -198,20 +198,22 @@ pub fn train(
         )
     };
     // a stage that turns `privileged_critic` on widens the critic's input
-    // to its environment's privileged values before its first iteration
-    let widen_critic = |trainer: &mut dyn Algorithm, env: &TaskEnv, iteration: u64| {
+    // to its environment's privileged values, and one that turns the
+    // height scan on both networks' input, before its first iteration
+    let widen = |trainer: &mut dyn Algorithm, env: &TaskEnv, iteration: u64| {
+        let context = |what: &str| format!("iteration {}: {what}", iteration + 1);
+        trainer
+            .widen_observation(env.policy_observation_size())
+            .with_context(|| context("the networks cannot take the stage's observation"))?;
         let privileged = env.observation_size() - env.policy_observation_size();
-        trainer.widen_critic(privileged).with_context(|| {
-            format!(
-                "iteration {}: the critic cannot take the stage's privileged values",
-                iteration + 1
-            )
-        })
+        trainer
+            .widen_critic(privileged)
+            .with_context(|| context("the critic cannot take the stage's privileged values"))
     };
     let mut stage = experiment.terrain_at(start_iteration).0;
     let mut world_levels = levels::start_levels(&experiment, &metrics_path, start_iteration)?;
     let mut env = build_env(&experiment, start_iteration, &world_levels)?;
-    widen_critic(&mut *trainer, &env, start_iteration)?;
+    widen(&mut *trainer, &env, start_iteration)?;
     for (e, logger) in loggers {
         env.attach_logger(e, logger);
     }
@@ -247,7 +249,7 @@ pub fn train(
                 &world_levels,
             );
             env = build_env(&experiment, iteration, &world_levels)?;
-            widen_critic(&mut *trainer, &env, iteration)?;
+            widen(&mut *trainer, &env, iteration)?;
             for l in loggers {
                 env.attach_logger(l.env, l.logger);
             }

@@ -75,7 +75,7 @@ impl RunPlan {
                 experiment.train.seed,
             ),
             None => (
-                experiment.task.observation_size(),
+                experiment.task_at(0).observation_size(),
                 robot::action::ACTION_SIZE,
                 experiment.train.seed,
             ),

@@ -92,6 +92,35 @@ impl ActorCritic {
         })
     }
 
+    /// The same networks with the actor and the critic both taking `extra`
+    /// more observation values after their present input (a critic with
+    /// privileged values cannot: they would fall between the two): the
+    /// first layers' weights for them are zero, so every action mean and
+    /// value is unchanged until training moves them.
+    pub fn with_observation(&self, extra: usize) -> Result<Self, LearnError> {
+        if self.privileged_size > 0 {
+            return Err(LearnError::Mismatch(format!(
+                "the critic sees {} privileged values after the observation; the observation cannot grow in front of them",
+                self.privileged_size
+            )));
+        }
+        let widen = |mlp: &crate::mlp::Mlp| -> Result<crate::mlp::Mlp, LearnError> {
+            let mut mlp = mlp.clone();
+            let first = &mlp.layers[0];
+            mlp.layers[0] = crate::mlp::Dense {
+                weight: Var::from_tensor(&with_zero_rows(first.weight.as_tensor(), extra)?)?,
+                bias: Var::from_tensor(&first.bias.as_tensor().copy()?)?,
+            };
+            Ok(mlp)
+        };
+        Ok(Self {
+            actor: widen(&self.actor)?,
+            critic: widen(&self.critic)?,
+            obs_size: self.obs_size + extra,
+            ..self.clone()
+        })
+    }
+
     /// `O`: the values the actor sees.
     pub fn obs_size(&self) -> usize {
         self.obs_size

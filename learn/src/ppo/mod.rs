@@ -120,6 +120,10 @@ impl Algorithm for Trainer {
         Trainer::widen_critic(self, privileged_size)
     }
 
+    fn widen_observation(&mut self, obs_size: usize) -> Result<(), LearnError> {
+        Trainer::widen_observation(self, obs_size)
+    }
+
     fn act_deterministic(&self, raw_obs: &[f32]) -> Result<Vec<f32>, LearnError> {
         Trainer::act_deterministic(self, raw_obs)
     }

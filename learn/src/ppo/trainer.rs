@@ -209,17 +209,61 @@ impl Trainer {
         }
         let extra = privileged_size - have;
         let policy = self.policy.with_privileged(extra)?;
+        self.grow_inputs(policy, extra, &["critic.0.weight"])
+    }
+
+    /// Gives the actor and the critic an observation of `obs_size` values,
+    /// the present ones followed by new ones, from the next iteration on (a
+    /// curriculum stage that turns on an observation block, such as the
+    /// height scan): as [`Self::widen_critic`], the new inputs' weights and
+    /// Adam moments start at zero, so every action and value is unchanged
+    /// until training moves them, and the normaliser counts the new values
+    /// from 0. Nothing changes at the present size; an observation cannot
+    /// shrink, grow in front of a critic's privileged values, or grow twice
+    /// (the normaliser keeps one count for appended values, so the networks'
+    /// inputs grow once in a run, by this or by [`Self::widen_critic`]).
+    pub fn widen_observation(&mut self, obs_size: usize) -> Result<(), LearnError> {
+        let have = self.policy.obs_size();
+        if obs_size == have {
+            return Ok(());
+        }
+        if obs_size < have {
+            return Err(LearnError::Mismatch(format!(
+                "the policy sees {have} observation values; it cannot be cut to {obs_size}"
+            )));
+        }
+        let extra = obs_size - have;
+        let policy = self.policy.with_observation(extra)?;
+        self.grow_inputs(policy, extra, &["actor.0.weight", "critic.0.weight"])
+    }
+
+    /// Takes `policy`, whose first layers named in `grown` have `extra`
+    /// more input rows than the present policy's, with Adam moments of zero
+    /// for the new rows and the normaliser's `extra` appended values.
+    fn grow_inputs(
+        &mut self,
+        policy: ActorCritic,
+        extra: usize,
+        grown: &[&str],
+    ) -> Result<(), LearnError> {
+        if let Some(appended) = self.normalizer.appended {
+            return Err(LearnError::Mismatch(format!(
+                "the networks' inputs grew once already (from value {} on); they can grow only once in a run",
+                appended.from
+            )));
+        }
         let mut adam = Adam::new(policy.named_vars(), self.adam.learning_rate)?;
         for (k, (name, var)) in adam.vars().to_vec().iter().enumerate() {
             let (m, v) = (&self.adam.m[k], &self.adam.v[k]);
             let rows = var.as_tensor().dims().first().copied().unwrap_or(0);
-            let grown = rows != m.dims().first().copied().unwrap_or(0);
-            if grown && name != "critic.0.weight" {
+            let changed = rows != m.dims().first().copied().unwrap_or(0);
+            if changed != grown.contains(&name.as_str()) {
                 return Err(LearnError::Mismatch(format!(
-                    "{name} changed shape when the critic was widened"
+                    "{name} {} shape when the inputs grew",
+                    if changed { "changed" } else { "kept its" }
                 )));
             }
-            if grown {
+            if changed {
                 adam.m[k] = with_zero_rows(m, extra)?;
                 adam.v[k] = with_zero_rows(v, extra)?;
             } else {

@@ -19,6 +19,7 @@
 //! | goal azimuth | negated |
 //! | goal position x, y | y negated |
 //! | phase k / 4 | (k + 2 mod 4) / 4 |
+//! | height scan, rows ahead of right-centre-left points | each row's right and left swapped |
 //! | privileged values, 3 per foot | legs swapped |
 //!
 //! Action (the raw values in [-1, 1] units, before the task clips them):
@@ -40,6 +41,7 @@
 
 use super::{ActionPrior, ObservationConfig, TaskConfig};
 use crate::action::{ACTION_SIZE, bound};
+use crate::height_scan::mirrored_point;
 
 /// Why a task has no mirror.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -100,6 +102,9 @@ impl TaskMirror {
                 "pitch" => slots.push(kept(start)),
                 "goal_azimuth" => slots.push(negated(start)),
                 "phase" => slots.push(Slot::Phase),
+                "height_scan" => {
+                    slots.extend((0..range.len()).map(|k| kept(start + mirrored_point(k))));
+                }
                 // the foot blocks: 12 values (FR FL RR RL, x y z) each
                 _ => {
                     assert_eq!(
@@ -266,6 +271,7 @@ mod tests {
             observation: ObservationConfig {
                 goal_line_ahead_m: Some(1.0),
                 privileged_critic: true,
+                height_scan: true,
                 ..ObservationConfig::default()
             },
             ..TaskConfig::default()
@@ -323,7 +329,7 @@ mod tests {
         assert!(worst(&after, &obs_right) < 0.05, "{after:?}\n{obs_right:?}");
         let feet = config_block(&left, "feet_now");
         assert!(worst(&after[feet.clone()], &obs_right[feet]) < 1e-3);
-        let phase = obs_size - 1;
+        let phase = config_block(&left, "phase").start;
         assert!(worst(&obs_left[..phase], &obs_right[..phase]) > 0.3);
     }
 

@@ -27,6 +27,7 @@
 //! | goal azimuth phi_g = atan2(goal y, goal x) | 1 | rad | base |
 //! | goal position x, y | 2 | m | base |
 //! | phase: index of the phase about to run (0 FL, 1 RR, 2 FR, 3 RL) / 4 | 1 | - | - |
+//! | only with `height_scan` (not the paper's): the base's height above the ground at 6 rows 0.1-1.1 m ahead x 3 points 0.15 m apart across its heading ([`crate::height_scan`]) | 18 | m | world z, points in the heading frame |
 //! | only with [`ActionPrior::ScriptedCrawl`]: the crawl's action for the phase about to run | 27 | action units | - |
 //!
 //! # Reward (per phase, summed)
@@ -134,6 +135,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::action::ACTION_SIZE;
 use crate::controller::{PhaseController, RobotState, feet_in_base_m, point_in_base};
+use crate::height_scan::scan_points_xy_m;
 use crate::model::LegName;
 use crate::snapshot::StepSnapshot;
 use crate::world::World;
@@ -379,6 +381,12 @@ impl Task {
             Some(self.episode.goal_xy_m),
         );
         snapshot.observed_goal_xy_m = self.observed_goal_xy_m();
+        if self.config.observation.height_scan {
+            snapshot.height_scan_points_m = scan_points_xy_m(&self.world.base_pose())
+                .iter()
+                .map(|&[x, y]| [x, y, self.world.surface_height_m(x, y)])
+                .collect();
+        }
         snapshot
     }
 
@@ -555,9 +563,55 @@ pub(crate) mod tests {
             foot_velocity: false,
             goal_line_ahead_m: None,
             privileged_critic: false,
+            height_scan: false,
         };
         assert_eq!(none.size(), 30);
         assert_eq!(none.blocks().last().unwrap().1.end, 30);
+        // the height scan: 18 values, the last block
+        let scanned = ObservationConfig {
+            height_scan: true,
+            ..full
+        };
+        assert_eq!(scanned.size(), 102 + 18);
+        assert_eq!(scanned.blocks().last().unwrap(), &("height_scan", 102..120));
+    }
+
+    /// With `height_scan` on, the observation ends with the base's height
+    /// above the ground at each scan point, and viewers get the points on
+    /// the ground.
+    #[test]
+    fn the_height_scan_block_is_the_base_height_above_each_point_and_viewers_get_the_points() {
+        let config = TaskConfig {
+            observation: ObservationConfig {
+                height_scan: true,
+                ..ObservationConfig::default()
+            },
+            ..TaskConfig::default()
+        };
+        let base = Isometry3::new(
+            Vector3::new(0.3, 0.1, 0.5),
+            Vector3::z() * std::f64::consts::FRAC_PI_4,
+        );
+        let (task, obs) = crafted(base, config);
+        let scan = block(&task, &obs, "height_scan");
+        let points = task.snapshot(0.0).height_scan_points_m;
+        assert_eq!((scan.len(), points.len()), (18, 18));
+        let z = task.world().base_pose().translation.z;
+        for (h, [x, y, ground]) in scan.iter().zip(points) {
+            assert!((ground - task.world().surface_height_m(x, y)).abs() < 1e-12);
+            assert!(
+                (f64::from(*h) - (z - ground)).abs() < 1e-5,
+                "{h} at {x}, {y}"
+            );
+        }
+        // the nearest row's centre, 0.1 m ahead along the 45-degree heading
+        let [x, y, _] = task.snapshot(0.0).height_scan_points_m[1];
+        let base_xy = task.world().base_pose().translation;
+        let (dx, dy) = (x - base_xy.x, y - base_xy.y);
+        assert!(
+            (dx - 0.1 / 2f64.sqrt()).abs() < 1e-3 && (dy - dx).abs() < 1e-3,
+            "{dx}, {dy}"
+        );
     }
 
     #[test]
@@ -1243,6 +1297,7 @@ pub(crate) mod tests {
             TaskConfig::default(),
         );
         assert_eq!(paper.snapshot(0.0).observed_goal_xy_m, None);
+        assert!(paper.snapshot(0.0).height_scan_points_m.is_empty());
         // turned 90 degrees left at the line: the point is on the right, at (0, -1)
         let (task, obs) = crafted(
             Isometry3::new(

@@ -3,6 +3,7 @@
 
 use super::Task;
 use crate::controller::RobotState;
+use crate::height_scan::HEIGHT_SCAN_POINTS;
 
 /// The previous phases whose start foot positions the paper observes.
 pub const FOOT_HISTORY_PHASES: usize = 3;
@@ -37,6 +38,12 @@ pub struct ObservationConfig {
     /// is unchanged.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub privileged_critic: bool,
+    /// the base's height above the ground at 18 points up to 1.1 m ahead
+    /// of it ([`crate::height_scan`]; not the paper's): the last block
+    /// (only an action prior's values follow it), so that a curriculum
+    /// stage that turns it on appends to the policy's input
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub height_scan: bool,
 }
 
 /// Values [`ObservationConfig::privileged_critic`] appends for the critic:
@@ -58,6 +65,7 @@ impl Default for ObservationConfig {
             foot_velocity: true,
             goal_line_ahead_m: None,
             privileged_critic: false,
+            height_scan: false,
         }
     }
 }
@@ -86,6 +94,9 @@ impl ObservationConfig {
             sizes.push(("foot_velocities", 12));
         }
         sizes.extend([("goal_azimuth", 1), ("goal_position", 2), ("phase", 1)]);
+        if self.height_scan {
+            sizes.push(("height_scan", HEIGHT_SCAN_POINTS));
+        }
         let mut start = 0;
         sizes
             .into_iter()
@@ -116,11 +127,12 @@ impl Task {
     /// Writes the observation (see the module docs for the layout): the
     /// controller's, for the world's state and the current goal.
     pub fn observe(&self, obs: &mut [f32]) {
-        self.controller.observe(
-            &RobotState::of_world(&self.world),
-            self.episode.goal_xy_m,
-            obs,
-        );
+        let state = if self.config.observation.height_scan {
+            RobotState::of_world_scanned(&self.world)
+        } else {
+            RobotState::of_world(&self.world)
+        };
+        self.controller.observe(&state, self.episode.goal_xy_m, obs);
     }
 
     /// Writes the critic's privileged values

@@ -12,7 +12,7 @@
 //! base frame is solved by IK, the joint angles become PD targets, and the
 //! world takes one 1/240 s step.
 //!
-//! # Observation (102 values with every block switched on)
+//! # Observation (102 values with every block of the paper switched on)
 //!
 //! | block | size | unit | frame |
 //! | --- | --- | --- | --- |

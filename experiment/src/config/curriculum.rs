@@ -294,7 +294,7 @@ impl Experiment {
     /// height scan turned on by a stage must be the observation's last
     /// values, so neither after a privileged critic nor with an action
     /// prior.
-    pub(super) fn check_stage_critics(&self, source: &str) -> Result<()> {
+    pub(super) fn check_stage_observations(&self, source: &str) -> Result<()> {
         let privileged = |stage: &Stage| self.task_of(stage).observation.privileged_critic;
         let scanned = |stage: &Stage| self.task_of(stage).observation.height_scan;
         if self.residual.is_some()

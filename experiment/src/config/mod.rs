@@ -267,7 +267,7 @@ impl Experiment {
             residual,
         };
         experiment.check_stage_rates(&format!("config {source}"))?;
-        experiment.check_stage_critics(&format!("config {source}"))?;
+        experiment.check_stage_observations(&format!("config {source}"))?;
         experiment.check_stage_levels(&format!("config {source}"))?;
         if experiment.residual.is_some() && experiment.curriculum.iter().any(|s| s.levels.is_some())
         {

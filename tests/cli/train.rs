@@ -396,19 +396,19 @@ fn a_curriculum_stage_sets_task_keys_and_resumes_exactly() {
     });
 }
 
-/// A stage that turns the critic's privileged values on: the critic is
-/// widened when the stage starts (the checkpoint says so from then on), a
-/// resume at the boundary and a fork from a run without them end as the
-/// uninterrupted run, and the policy acts on the plain observation.
-#[test]
-fn a_stage_gives_the_critic_privileged_values_and_resumes_and_forks_exactly() {
-    let runs = TwoStages::new(
-        "stage-privileged",
-        "\n[curriculum.task.observation]\nprivileged_critic = true\n",
-    );
+/// A stage that turns on the observation key `key` (`[curriculum.task.observation]`):
+/// the log names it, `check_states` reads the checkpoints of iterations 2
+/// (before) and 4 (after the widening), a resume at the boundary keeps the
+/// key in its config and ends as the uninterrupted run, a fork from a run
+/// that never had it ends the same, and the policy acts.
+fn a_stage_turns_on(name: &str, key: &str, check_states: impl FnOnce(&str, &str)) {
+    let table = format!("[curriculum.task.observation]\n{key} = true\n");
+    let runs = TwoStages::new(name, &format!("\n{table}"));
     let log = runs.train(&runs.a);
     assert!(
-        log.contains("curriculum stage 2: rigid, task: observation = { privileged_critic = true }"),
+        log.contains(&format!(
+            "curriculum stage 2: rigid, task: observation = {{ {key} = true }}"
+        )),
         "{log}"
     );
     let state = |iteration: &str| {
@@ -420,23 +420,13 @@ fn a_stage_gives_the_critic_privileged_values_and_resumes_and_forks_exactly() {
         )
         .unwrap()
     };
-    assert!(!state("iter-000002").contains("privileged_size"));
-    let widened = state("iter-000004");
-    assert!(
-        widened.contains("privileged_size = 12")
-            && widened.contains("normalizer_appended_from = 102")
-            && widened.contains("normalizer_appended_count = 16.0"),
-        "{widened}"
-    );
+    check_states(&state("iter-000002"), &state("iter-000004"));
     runs.resume_after_stage_1(|checkpoint| {
         let saved = std::fs::read_to_string(checkpoint.join("config.toml")).unwrap();
-        assert!(
-            saved.contains("[curriculum.task.observation]\nprivileged_critic = true\n"),
-            "{saved}"
-        );
+        assert!(saved.contains(&table), "{saved}");
     });
-    // a fork from the end of stage 1 of a run that never had them
-    let plain = TwoStages::new("stage-privileged-source", "");
+    // a fork from the end of stage 1 of a run that never had it
+    let plain = TwoStages::new(&format!("{name}-source"), "");
     plain.train(&plain.a);
     let forked = runs.b.with_file_name("forked");
     ok(&runs.args(
@@ -447,46 +437,41 @@ fn a_stage_gives_the_critic_privileged_values_and_resumes_and_forks_exactly() {
     rolls_out_two_phases_on_rigid_ground(&runs.a);
 }
 
+/// A stage that turns the critic's privileged values on: the critic is
+/// widened when the stage starts (the checkpoint says so from then on), a
+/// resume at the boundary and a fork from a run without them end as the
+/// uninterrupted run, and the policy acts on the plain observation.
+#[test]
+fn a_stage_gives_the_critic_privileged_values_and_resumes_and_forks_exactly() {
+    a_stage_turns_on(
+        "stage-privileged",
+        "privileged_critic",
+        |before, widened| {
+            assert!(!before.contains("privileged_size"));
+            assert!(
+                widened.contains("privileged_size = 12")
+                    && widened.contains("normalizer_appended_from = 102")
+                    && widened.contains("normalizer_appended_count = 16.0"),
+                "{widened}"
+            );
+        },
+    );
+}
+
 /// A stage that turns the height scan on: both networks take its 18
 /// values from the stage on (the checkpoint says so), a resume at the
 /// boundary and a fork from a run without it end as the uninterrupted run,
 /// and the policy acts on the scanned observation.
 #[test]
 fn a_stage_appends_the_height_scan_and_resumes_and_forks_exactly() {
-    let runs = TwoStages::new(
-        "stage-height-scan",
-        "\n[curriculum.task.observation]\nheight_scan = true\n",
-    );
-    let log = runs.train(&runs.a);
-    assert!(
-        log.contains("curriculum stage 2: rigid, task: observation = { height_scan = true }"),
-        "{log}"
-    );
-    let state = |iteration: &str| {
-        std::fs::read_to_string(
-            runs.a
-                .join("checkpoints")
-                .join(iteration)
-                .join("state.toml"),
-        )
-        .unwrap()
-    };
-    assert!(state("iter-000002").contains("obs_size = 102"));
-    let widened = state("iter-000004");
-    assert!(
-        widened.contains("obs_size = 120") && widened.contains("normalizer_appended_from = 102"),
-        "{widened}"
-    );
-    runs.resume_after_stage_1(|_| {});
-    let plain = TwoStages::new("stage-height-scan-source", "");
-    plain.train(&plain.a);
-    let forked = runs.b.with_file_name("forked");
-    ok(&runs.args(
-        &forked,
-        &["--fork", s(&plain.a.join("checkpoints/iter-000002"))],
-    ));
-    assert_eq!(weights(&runs.a), weights(&forked), "the fork differs");
-    rolls_out_two_phases_on_rigid_ground(&runs.a);
+    a_stage_turns_on("stage-height-scan", "height_scan", |before, widened| {
+        assert!(before.contains("obs_size = 102"));
+        assert!(
+            widened.contains("obs_size = 120")
+                && widened.contains("normalizer_appended_from = 102"),
+            "{widened}"
+        );
+    });
 }
 
 /// `--fork`: a run that goes on from another run's checkpoint, under a

@@ -30,11 +30,12 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use nalgebra::Vector3;
-use robot::task::{PhaseOutcome, PhaseRun, Task};
+use robot::WorldConfig;
+use robot::task::{ActionPrior, PhaseOutcome, PhaseRun, Task, TaskConfig};
 
-use crate::config::{Experiment, ResidualConfig};
+use crate::config::{Experiment, ResidualConfig, default_task};
 use crate::policy::Policy;
 use robot::snapshot::PhaseObserver;
 
@@ -45,10 +46,16 @@ pub const NO_PHASE_POLICY: &str = "none";
 /// Values of the lower-level action: an offset per foot and axis.
 pub const ACTION_SIZE: usize = 12;
 
-/// Gives `experiment` its phase policy's observation, action prior and
-/// physics (the phase policy reads the task's observation and was trained
-/// in those physics), as an evaluation fits a scene to a policy; the run's
-/// `config.toml` then spells them out.
+/// Gives `experiment` its phase policy's observation, action prior, swing
+/// height reference and physics (the phase policy reads the task's
+/// observation and was trained in those physics), as an evaluation fits a
+/// scene to a policy, and resolves the curriculum's stages over them again;
+/// the run's `config.toml` then spells them out, and reading it back gives
+/// the same stages. A setting the file gives that the phase policy would
+/// replace is refused by name rather than ignored (a value equal to the
+/// phase policy's, as a run's own `config.toml` has, is fine). Without a
+/// phase level (`"none"`) nothing reads the task's observation but its goal
+/// point, so a height scan or an action prior there is refused too.
 pub fn fit_to_phase_policy(
     registry: &terrain_plugins::Registry,
     experiment: &mut Experiment,
@@ -56,12 +63,88 @@ pub fn fit_to_phase_policy(
     let Some(config) = &experiment.residual else {
         return Ok(());
     };
-    match load_phase_policy(registry, config)? {
-        Some(phase_policy) => {
-            phase_policy.fit_scene(&mut experiment.task, &mut experiment.physics, None)
+    let Some(phase_policy) = load_phase_policy(registry, config)? else {
+        if experiment.task.observation.height_scan {
+            bail!(
+                "[task.observation] height_scan = true: with [residual] phase_policy = \"none\" no phase-level policy observes the task, and the lower level sees its own {OBSERVATION_SIZE} values"
+            );
         }
-        None => Ok(()),
+        if experiment.task.action_prior != ActionPrior::None {
+            bail!(
+                "[task] action_prior = {:?}: with [residual] phase_policy = \"none\" there are no phase actions to add the prior to",
+                experiment.task.action_prior.name()
+            );
+        }
+        return Ok(());
+    };
+    let file_task = experiment.task.clone();
+    let file_physics = experiment.physics.clone();
+    phase_policy.fit_scene(&mut experiment.task, &mut experiment.physics, None)?;
+    let default_task = default_task();
+    let replaced = [
+        (
+            "[task.observation]",
+            settings_replaced(
+                &file_task.observation,
+                &experiment.task.observation,
+                &default_task.observation,
+            ),
+        ),
+        (
+            "[task]",
+            settings_replaced(
+                &ReplacedTaskKeys::of(&file_task),
+                &ReplacedTaskKeys::of(&experiment.task),
+                &ReplacedTaskKeys::of(&default_task),
+            ),
+        ),
+        (
+            "[physics]",
+            settings_replaced(&file_physics, &experiment.physics, &WorldConfig::default()),
+        ),
+    ];
+    for (section, keys) in replaced {
+        if !keys.is_empty() {
+            bail!(
+                "{section} {}: [residual] phase_policy {} was trained otherwise, and a residual's task and physics are its phase policy's; remove the setting or give the phase policy's value",
+                keys.join(", "),
+                config.phase_policy.display()
+            );
+        }
     }
+    experiment.resolve_stages_again()
+}
+
+/// The task keys besides the observation that a residual's phase policy
+/// sets.
+#[derive(serde::Serialize)]
+struct ReplacedTaskKeys {
+    action_prior: &'static str,
+    swing_height_reference: &'static str,
+}
+
+impl ReplacedTaskKeys {
+    fn of(task: &TaskConfig) -> Self {
+        Self {
+            action_prior: task.action_prior.name(),
+            swing_height_reference: task.swing_height_reference.name(),
+        }
+    }
+}
+
+/// The keys whose value in `file` is neither the phase policy's (`fitted`)
+/// nor the default (where the file is silent), as `key = file's (the phase
+/// policy's fitted)`.
+fn settings_replaced<T: serde::Serialize>(file: &T, fitted: &T, default: &T) -> Vec<String> {
+    let table = |settings: &T| toml::Table::try_from(settings).unwrap_or_default();
+    let (file, fitted, default) = (table(file), table(fitted), table(default));
+    file.iter()
+        .filter(|(key, value)| fitted.get(*key) != Some(value) && default.get(*key) != Some(value))
+        .map(|(key, value)| {
+            let phase = fitted.get(key).map_or("not set".into(), |v| v.to_string());
+            format!("{key} = {value} (the phase policy's: {phase})")
+        })
+        .collect()
 }
 
 /// The phase policy `config` names (`None` for `"none"`: no phase level).
@@ -295,6 +378,103 @@ mod tests {
             ..ResidualConfig::default()
         };
         ResidualDriver::new(config, Some(Policy::Scripted(ScriptedCrawl::default())))
+    }
+
+    /// A residual's task and physics are its phase policy's, its stages'
+    /// included (as reading the run's `config.toml` back gives them); a
+    /// setting the file gives that the phase policy would replace is
+    /// refused by name, and without a phase level so are settings only a
+    /// phase level reads.
+    #[test]
+    fn a_residual_takes_its_phase_policys_task_and_physics_and_refuses_others() {
+        let registry = Registry::builtin();
+        let tv2 = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../policies/tv2");
+        let config = |task: &str, physics: &str, phase: &str| {
+            format!(
+                "[terrain]\nspec = \"elastic:5cm\"\n\n[task]\nmax_paid_progress_m = 0.03\n{task}\n[physics]\n{physics}\n\n[residual]\nphase_policy = {phase:?}\n\n[[curriculum]]\nterrain = \"rigid\"\niterations = 1\n\n[[curriculum]]\nterrain = \"elastic:5cm\"\niterations = 1\n\n[curriculum.task]\nmax_paid_progress_m = 0.02\n"
+            )
+        };
+        let fitted = |text: &str| {
+            let mut experiment = Experiment::from_toml(text, "c.toml", &registry).unwrap();
+            fit_to_phase_policy(&registry, &mut experiment).map(|()| experiment)
+        };
+        let phase_level = Policy::from_arg(&registry, &tv2.to_string_lossy(), None).unwrap();
+        let Policy::Trained { task, .. } = &phase_level else {
+            panic!("policies/tv2 is a trained policy")
+        };
+        let experiment = fitted(&config("", "", &tv2.to_string_lossy())).unwrap();
+        assert_ne!(
+            task.observation,
+            default_task().observation,
+            "the test needs a difference"
+        );
+        for iteration in [0, 1] {
+            assert_eq!(experiment.task_at(iteration).observation, task.observation);
+        }
+        assert_eq!(experiment.task_at(1).max_paid_progress_m, Some(0.02));
+        // the run's config.toml gives the same experiment back
+        let again = Experiment::from_toml(&experiment.to_toml(), "config.toml", &registry).unwrap();
+        assert_eq!(again.task_at(1), experiment.task_at(1));
+        assert_eq!(again.physics_at(1), experiment.physics_at(1));
+        // settings the phase policy replaces, named
+        for (task_keys, physics, named) in [
+            (
+                "[task.observation]\ngoal_line_ahead_m = 2.0\n",
+                "",
+                "[task.observation] goal_line_ahead_m = 2.0 (the phase policy's: 1.0)",
+            ),
+            (
+                "swing_height_reference = \"touchdown\"\n",
+                "",
+                "[task] swing_height_reference = \"touchdown\"",
+            ),
+            (
+                "[task.observation]\nheight_scan = true\n",
+                "",
+                "[task.observation] height_scan = true",
+            ),
+            ("", "step_rate_hz = 120", "[physics] step_rate_hz = 120"),
+        ] {
+            let err = fitted(&config(task_keys, physics, &tv2.to_string_lossy()))
+                .err()
+                .unwrap_or_else(|| panic!("{named}: accepted"))
+                .to_string();
+            assert!(err.contains(named) && err.contains("policies/tv2"), "{err}");
+        }
+        // the phase policy's own values are fine
+        assert!(
+            fitted(&config(
+                "[task.observation]\ngoal_line_ahead_m = 1.0\n",
+                "",
+                &tv2.to_string_lossy()
+            ))
+            .is_ok()
+        );
+        // without a phase level
+        assert!(
+            fitted(&config(
+                "[task.observation]\ngoal_line_ahead_m = 2.0\n",
+                "",
+                "none"
+            ))
+            .is_ok()
+        );
+        for (task_keys, named) in [
+            (
+                "[task.observation]\nheight_scan = true\n",
+                "height_scan = true",
+            ),
+            (
+                "action_prior = \"scripted_crawl\"\n",
+                "action_prior = \"scripted_crawl\"",
+            ),
+        ] {
+            let err = fitted(&config(task_keys, "", "none"))
+                .err()
+                .unwrap()
+                .to_string();
+            assert!(err.contains(named) && err.contains("\"none\""), "{err}");
+        }
     }
 
     #[test]

@@ -358,6 +358,32 @@ impl Experiment {
     }
 }
 
+impl Experiment {
+    /// Resolves every stage's task and physics again over `[task]` and
+    /// `[physics]` as they are now, as reading [`Experiment::to_toml`] back
+    /// does (after a residual run takes its phase policy's observation and
+    /// physics).
+    pub(crate) fn resolve_stages_again(&mut self) -> Result<()> {
+        let task_table =
+            toml::Table::try_from(&self.task).context("the task settings as a TOML table")?;
+        for (k, stage) in self.curriculum.iter_mut().enumerate() {
+            if !stage.task_overrides.is_empty() {
+                stage.task = Some(stage_task(&task_table, &stage.task_overrides).map_err(|e| {
+                    anyhow!("[[curriculum]] stage {} [curriculum.task]: {e}", k + 1)
+                })?);
+            }
+            if !stage.physics_overrides.is_empty() {
+                stage.physics = Some(
+                    resolve_physics(&self.physics, &stage.physics_overrides).map_err(|e| {
+                        anyhow!("[[curriculum]] stage {} [curriculum.physics]: {e}", k + 1)
+                    })?,
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Reads `[[curriculum]]` (the stages' tasks over `task_table`, the
 /// `[task]` section, and their physics over `physics`, the `[physics]`
 /// section resolved); `source` names the file in errors.

@@ -246,7 +246,8 @@ fn a_tiny_plan_puts_controllers_side_by_side_on_terrains_and_through_a_change() 
     );
     let page = std::fs::read_to_string(out.join("controllers.md")).unwrap();
     assert!(page.contains("| controller | policy | `rigid` |"), "{page}");
-    assert!(page.contains("| crawl | scripted | 2/2, "), "{page}");
+    // both seed sets, then each set's share
+    assert!(page.contains("| crawl | scripted | 2/2 (1, 1), "), "{page}");
     assert!(
         page.contains(&format!("| phase level | {rigid_policy} |")),
         "{page}"

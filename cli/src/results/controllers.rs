@@ -9,7 +9,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use super::grid::terrain_grid;
-use super::number::fixed;
+use super::number::{fixed, success};
 use crate::eval::plots::{self, Curve, Panel};
 use experiment::eval::EvalReport;
 use experiment::eval::response::profile_bin_secs;
@@ -33,12 +33,10 @@ pub fn terrain_table(rows: &[(&str, &str)], terrains: &[String], cells: &[Cell])
         terrains,
         |(name, _), t| {
             find(cells, name, t).map(|c| {
-                let s = &c.report.summary;
                 format!(
-                    "{}/{}, {} m/s",
-                    s.successes,
-                    s.episodes,
-                    fixed(s.mean_speed_m_per_s.mean, 3)
+                    "{}, {} m/s",
+                    success(c.report),
+                    fixed(c.report.summary.mean_speed_m_per_s.mean, 3)
                 )
             })
         },

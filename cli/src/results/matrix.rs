@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 
 use super::grid::terrain_grid;
-use super::number::{fixed, mean_and_range};
+use super::number::{fixed, mean_and_range, success};
 use experiment::eval::EvalReport;
 
 /// One cell: a policy's evaluation on a terrain, with the commands that
@@ -25,21 +25,14 @@ pub struct Cell<'a> {
 pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> String {
     let find = |p: &str, t: &str| cells.iter().find(|c| c.policy == p && c.terrain == t);
     let mut out = String::from(
-        "Episodes that ran every phase without a fall, of those run (all seed sets together):\n\n",
+        "Episodes that ran every phase without a fall, of those run (all seed sets together, then each set's when there are several):\n\n",
     );
     out.push_str(&terrain_grid(
         &["policy"],
         policies,
         |p| vec![p.clone()],
         terrains,
-        |p, t| {
-            find(p, t).map(|c| {
-                format!(
-                    "{}/{}",
-                    c.report.summary.successes, c.report.summary.episodes
-                )
-            })
-        },
+        |p, t| find(p, t).map(|c| success(c.report)),
     ));
     out.push_str(
         "\nPer cell: speed is the distance along x over the simulated time, per episode (mean); the cost of transport is the joints' mechanical energy (the sum over steps of |tau q_dot| dt) over m g times the distance, all episodes pooled; foot slip is the horizontal travel of the feet while they touch the ground, per phase (mean over episodes).\n\n| policy | terrain | success | distance, m (mean; min-max) | speed, m/s | cost of transport | foot slip, cm/phase | falls by cause |\n| --- | --- | ---: | --- | ---: | ---: | ---: | --- |\n",
@@ -50,9 +43,8 @@ pub fn markdown(policies: &[String], terrains: &[String], cells: &[Cell]) -> Str
             let s = &c.report.summary;
             let _ = writeln!(
                 out,
-                "| {p} | `{t}` | {}/{} | {} | {} | {} | {:.2} | {} |",
-                s.successes,
-                s.episodes,
+                "| {p} | `{t}` | {} | {} | {} | {} | {:.2} | {} |",
+                success(c.report),
                 mean_and_range(&s.distance_m, 2),
                 fixed(s.mean_speed_m_per_s.mean, 3),
                 s.cost_of_transport

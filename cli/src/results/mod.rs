@@ -36,6 +36,7 @@ use serde::{Deserialize, Serialize};
 use terrain_plugins::Registry;
 
 use crate::eval::{self, EvalReport, EvalRequest, slug};
+use experiment::eval::seed_sets::SeedSets;
 use plan::Plan;
 
 /// Arguments of `quadwalk results`.
@@ -210,10 +211,18 @@ struct Evaluations<'a> {
 }
 
 impl Evaluations<'_> {
-    /// The evaluation of `cell`.
+    /// The evaluation of `cell`, with each seed set's share.
     fn get(&mut self, cell: &Cell) -> Result<&EvalReport> {
         if !self.done.contains_key(cell) {
-            let report = self.run(cell)?;
+            let mut report = self.run(cell)?;
+            if cell.seed_sets.len() > 1 {
+                let sets = SeedSets::new(
+                    cell.seed_sets.clone(),
+                    u64::from(self.plan.evaluation.episodes),
+                )
+                .map_err(anyhow::Error::msg)?;
+                report.seed_sets = sets.summarize(&report.episodes);
+            }
             self.done.insert(cell.clone(), report);
         }
         Ok(&self.done[cell])
@@ -366,11 +375,10 @@ pub fn results(registry: &Registry, args: &ResultsArgs) -> Result<()> {
             let (cell, report) = &reports[scenario];
             let _ = writeln!(
                 page,
-                "| {scenario} | {} | `{}` | {}/{} | {:.2} |",
+                "| {scenario} | {} | `{}` | {} | {:.2} |",
                 cell.policy,
                 cell.terrain,
-                report.summary.successes,
-                report.summary.episodes,
+                number::success(report),
                 report.summary.distance_m.mean
             );
         }

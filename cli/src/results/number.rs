@@ -22,9 +22,26 @@ pub fn mean_and_range(spread: &experiment::eval::summary::Spread, decimals: usiz
     )
 }
 
+/// An evaluation's success as a table cell: "successes/episodes", and
+/// each seed set's successes after it when there were several sets
+/// ("27/30 (9, 8, 10)"), since a bar like 9 of 10 holds per set.
+pub fn success(report: &experiment::eval::EvalReport) -> String {
+    let s = &report.summary;
+    let pooled = format!("{}/{}", s.successes, s.episodes);
+    if report.seed_sets.len() < 2 {
+        return pooled;
+    }
+    let per_set: Vec<String> = report
+        .seed_sets
+        .iter()
+        .map(|set| set.successes.to_string())
+        .collect();
+    format!("{pooled} ({})", per_set.join(", "))
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{fixed, mean_and_range};
+    use super::{fixed, mean_and_range, success};
 
     #[test]
     fn a_value_that_rounds_to_zero_has_no_sign() {
@@ -42,5 +59,34 @@ mod tests {
         assert_eq!(mean_and_range(&spread, 2), "13.45 (0.42-20.03)");
         spread.min = -0.001;
         assert_eq!(mean_and_range(&spread, 2), "13.45 (0.00-20.03)");
+    }
+
+    #[test]
+    fn a_success_shows_each_seed_sets_share_when_there_are_several() {
+        use experiment::eval::seed_sets::SeedSetSummary;
+        let set = |first_seed, successes| SeedSetSummary {
+            first_seed,
+            episodes: 2,
+            successes,
+            mean_distance_m: 1.0,
+        };
+        let mut summary = experiment::eval::summary::Summary::of(&[], 0.75);
+        (summary.successes, summary.episodes) = (3, 4);
+        let mut report = experiment::eval::EvalReport {
+            format: "quadwalk-eval/1".into(),
+            policy: "p".into(),
+            terrain: "rigid".into(),
+            first_seed: 7,
+            max_phases: 400,
+            stochastic: false,
+            task_overrides: Vec::new(),
+            step_rate_hz: 240,
+            summary,
+            seed_sets: vec![set(7, 2), set(41, 1)],
+            episodes: Vec::new(),
+        };
+        assert_eq!(success(&report), "3/4 (2, 1)");
+        report.seed_sets.truncate(1);
+        assert_eq!(success(&report), "3/4");
     }
 }

@@ -356,9 +356,7 @@ impl Experiment {
         }
         Ok(())
     }
-}
 
-impl Experiment {
     /// Resolves every stage's task and physics again over `[task]` and
     /// `[physics]` as they are now, as reading [`Experiment::to_toml`] back
     /// does (after a residual run takes its phase policy's observation and

@@ -136,7 +136,10 @@ impl ReplacedTaskKeys {
 /// nor the default (where the file is silent), as `key = file's (the phase
 /// policy's fitted)`.
 fn settings_replaced<T: serde::Serialize>(file: &T, fitted: &T, default: &T) -> Vec<String> {
-    let table = |settings: &T| toml::Table::try_from(settings).unwrap_or_default();
+    // a struct of settings always serialises to a table; an empty one here
+    // would let every replaced setting through unnamed
+    let table =
+        |settings: &T| toml::Table::try_from(settings).expect("settings serialise to a table");
     let (file, fitted, default) = (table(file), table(fitted), table(default));
     file.iter()
         .filter(|(key, value)| fitted.get(*key) != Some(value) && default.get(*key) != Some(value))
